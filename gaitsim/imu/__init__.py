@@ -1,0 +1,1 @@
+"""IMU error model, datasheet units, presets and the simulated calibration lab."""

@@ -1,0 +1,296 @@
+"""Recording folders: the interop contract between the simulator, measured data and the filter.
+
+A recording is a folder anyone can read without this project:
+
+``imu.csv``
+    ``t, acc_x, acc_y, acc_z, gyr_x, gyr_y, gyr_z`` -- s, m/s^2 (specific force, body), rad/s (body).
+``truth.csv`` (simulated recordings)
+    ``t, pos_*, vel_*, q_w..q_z, gyr_*, acc_*, dv_*, dth_*, stance`` -- true IMU-site position (m, world
+    ENU), velocity (m/s, world), attitude (body->world, w first), angular rate (rad/s, body), specific
+    force (m/s^2, body), exact increments over [t_k, t_k+1] (see :class:`Truth`) and the stance label.
+``events.csv`` (simulated recordings)
+    one row per stride: ``stride, t_ic, t_ff, t_ho, t_to, disp_x, disp_y, disp_z`` -- times (s) of initial
+    contact, foot flat, heel off and toe off, and the true IMU displacement (m, world) over the labelled
+    stance [t_ff, t_ho).
+``reference.csv`` (measured recordings, optional)
+    ``t, pos_x, pos_y, pos_z`` in the recording's world frame (m), on the IMU clock.
+``meta.json``
+    schema version, generator, frames and units of every column, gait/path/sensor parameters, seed.
+``recording.npz`` (optional)
+    a binary twin of the CSVs for speed; the CSVs stay the reference.
+
+This module belongs to ``nav`` so that the filter can read any recording without the simulator;
+``gaitsim`` imports it to write them.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+SCHEMA_VERSION = 1
+
+IMU_COLUMNS = ("t", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+TRUTH_COLUMNS = (
+    "t", "pos_x", "pos_y", "pos_z", "vel_x", "vel_y", "vel_z", "q_w", "q_x", "q_y", "q_z",
+    "gyr_x", "gyr_y", "gyr_z", "acc_x", "acc_y", "acc_z", "dv_x", "dv_y", "dv_z",
+    "dth_x", "dth_y", "dth_z", "stance",
+)
+EVENT_COLUMNS = ("stride", "t_ic", "t_ff", "t_ho", "t_to", "disp_x", "disp_y", "disp_z")
+REFERENCE_COLUMNS = ("t", "pos_x", "pos_y", "pos_z")
+
+COLUMN_UNITS = {
+    "imu.csv": {"t": "s", "acc": "m/s^2, specific force, sensor frame", "gyr": "rad/s, sensor frame"},
+    "truth.csv": {
+        "t": "s", "pos": "m, world ENU", "vel": "m/s, world ENU", "q": "unit quaternion (w,x,y,z), body->world",
+        "gyr": "rad/s, body", "acc": "m/s^2, specific force, body",
+        "dv": "m/s, velocity increment over [t_k, t_k+1] expressed in the body frame at t_k (sculling-exact)",
+        "dth": "rad, rotation vector of the attitude increment over [t_k, t_k+1] (coning-exact)",
+        "stance": "1 inside the labelled stance (foot flat, t_ff <= t < t_ho), else 0",
+    },
+    "events.csv": {"t_*": "s", "disp": "m, world ENU, true IMU displacement over [t_ff, t_ho)"},
+    "reference.csv": {"t": "s, IMU clock", "pos": "m, recording world frame"},
+}
+
+
+class RecordingError(ValueError):
+    """A recording folder or array that cannot be used; the message names file, column and value."""
+
+
+@dataclass
+class Truth:
+    """Exact kinematics of the IMU site, sampled on the recording's time grid.
+
+    Attributes
+    ----------
+    t : (N,) s
+    pos, vel : (N, 3) m, m/s in the world frame (ENU).
+    quat : (N, 4) attitude body->world (w, x, y, z).
+    gyr : (N, 3) rad/s, body-frame angular rate.
+    acc : (N, 3) m/s^2, body-frame specific force.
+    dv : (N, 3) m/s, ``C_k^T (v_{k+1} - v_k - g dt)``: the velocity increment over [t_k, t_k+1] in the
+        body frame at t_k. Last row is zero.
+    dth : (N, 3) rad, rotation vector of ``q_k^* ⊗ q_{k+1}``. Last row is zero.
+    stance : (N,) bool, the labelled stance (foot flat).
+    """
+
+    t: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+    quat: np.ndarray
+    gyr: np.ndarray
+    acc: np.ndarray
+    dv: np.ndarray
+    dth: np.ndarray
+    stance: np.ndarray
+
+    def as_table(self) -> np.ndarray:
+        return np.column_stack(
+            [self.t, self.pos, self.vel, self.quat, self.gyr, self.acc, self.dv, self.dth, self.stance.astype(float)]
+        )
+
+    @classmethod
+    def from_table(cls, a: np.ndarray) -> "Truth":
+        return cls(
+            t=a[:, 0], pos=a[:, 1:4], vel=a[:, 4:7], quat=a[:, 7:11], gyr=a[:, 11:14], acc=a[:, 14:17],
+            dv=a[:, 17:20], dth=a[:, 20:23], stance=a[:, 23] > 0.5,
+        )
+
+
+@dataclass
+class Events:
+    """Per-stride gait events (s) and the true IMU displacement over the labelled stance (m, world)."""
+
+    t_ic: np.ndarray
+    t_ff: np.ndarray
+    t_ho: np.ndarray
+    t_to: np.ndarray
+    stance_displacement: np.ndarray
+
+    def as_table(self) -> np.ndarray:
+        n = len(self.t_ic)
+        return np.column_stack([np.arange(n), self.t_ic, self.t_ff, self.t_ho, self.t_to, self.stance_displacement])
+
+    @classmethod
+    def from_table(cls, a: np.ndarray) -> "Events":
+        a = np.atleast_2d(a)
+        return cls(t_ic=a[:, 1], t_ff=a[:, 2], t_ho=a[:, 3], t_to=a[:, 4], stance_displacement=a[:, 5:8])
+
+
+@dataclass
+class Reference:
+    """A measured position reference on the IMU clock (m, recording world frame)."""
+
+    t: np.ndarray
+    pos: np.ndarray
+
+
+@dataclass
+class Recording:
+    """What a sensor output, with whatever truth or reference is known.
+
+    Attributes
+    ----------
+    t : (N,) s from the start of the recording.
+    acc : (N, 3) m/s^2 measured specific force, sensor frame.
+    gyr : (N, 3) rad/s measured angular rate, sensor frame.
+    meta : dict, the content of ``meta.json``.
+    truth, events, reference : optional.
+    """
+
+    t: np.ndarray
+    acc: np.ndarray
+    gyr: np.ndarray
+    meta: dict = field(default_factory=dict)
+    truth: Truth | None = None
+    events: Events | None = None
+    reference: Reference | None = None
+
+    @property
+    def n(self) -> int:
+        return len(self.t)
+
+
+def _write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
+    # %.17g round-trips float64 exactly
+    np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+
+
+def _read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
+    with open(path) as fh:
+        first = fh.readline().strip().split(",")
+    if tuple(first) != header:
+        raise RecordingError(f"{path}: header {first} does not match the expected columns {list(header)}")
+    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if table.shape[1] != len(header):
+        raise RecordingError(f"{path}: {table.shape[1]} columns, expected {len(header)}")
+    return table
+
+
+def _atomic_dir(target: Path, overwrite: bool):
+    """Context-free helper: make a temporary sibling folder that :func:`_commit_dir` renames into place."""
+    target = Path(target)
+    if target.exists() and any(target.iterdir()) and not overwrite:
+        raise FileExistsError(f"{target}: output folder exists and is not empty (pass overwrite=True / --force)")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
+
+
+def commit_dir(tmp: Path, target: Path) -> None:
+    """Move a finished temporary folder into place; an older ``target`` is replaced only now."""
+    target = Path(target)
+    if target.exists():
+        old = target.with_name(f".{target.name}.old-{os.getpid()}")
+        os.replace(target, old)
+        os.replace(tmp, target)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(tmp, target)
+
+
+class atomic_output_dir:
+    """``with atomic_output_dir(DIR) as tmp:`` write into ``tmp``; it becomes DIR only if the block succeeds."""
+
+    def __init__(self, target: str | Path, overwrite: bool = False):
+        self.target = Path(target)
+        self.overwrite = overwrite
+
+    def __enter__(self) -> Path:
+        self.tmp = _atomic_dir(self.target, self.overwrite)
+        return self.tmp
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            commit_dir(self.tmp, self.target)
+        else:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+        return False
+
+
+def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> None:
+    """Write ``rec`` into an existing (temporary) folder. Prefer :func:`write_recording`."""
+    folder = Path(folder)
+    _write_csv(folder / "imu.csv", IMU_COLUMNS, np.column_stack([rec.t, rec.acc, rec.gyr]))
+    arrays = {"imu": np.column_stack([rec.t, rec.acc, rec.gyr])}
+    if rec.truth is not None:
+        arrays["truth"] = rec.truth.as_table()
+        _write_csv(folder / "truth.csv", TRUTH_COLUMNS, arrays["truth"])
+    if rec.events is not None:
+        arrays["events"] = rec.events.as_table()
+        _write_csv(folder / "events.csv", EVENT_COLUMNS, arrays["events"])
+    if rec.reference is not None:
+        arrays["reference"] = np.column_stack([rec.reference.t, rec.reference.pos])
+        _write_csv(folder / "reference.csv", REFERENCE_COLUMNS, arrays["reference"])
+    meta = dict(rec.meta)
+    meta.setdefault("schema_version", SCHEMA_VERSION)
+    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if (folder / k).exists() or k == "imu.csv"})
+    with open(folder / "meta.json", "w") as fh:
+        json.dump(meta, fh, indent=2, sort_keys=True, default=_json_default)
+    if binary:
+        np.savez(folder / "recording.npz", **arrays)
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()
+    raise TypeError(f"meta.json: cannot serialise {type(o).__name__}")
+
+
+def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False, binary: bool = True) -> Path:
+    """Write a recording folder atomically: an interrupted write leaves nothing at ``folder``."""
+    with atomic_output_dir(folder, overwrite) as tmp:
+        write_recording_into(rec, tmp, binary=binary)
+    return Path(folder)
+
+
+def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
+    """Read a recording folder written by :func:`write_recording` (or by hand in the same format)."""
+    folder = Path(folder)
+    if not (folder / "imu.csv").exists():
+        raise RecordingError(f"{folder}: not a recording folder (no imu.csv)")
+    meta = {}
+    if (folder / "meta.json").exists():
+        with open(folder / "meta.json") as fh:
+            meta = json.load(fh)
+    npz_path = folder / "recording.npz"
+    if prefer_binary and npz_path.exists():
+        with np.load(npz_path) as z:
+            tables = {k: z[k] for k in z.files}
+    else:
+        tables = {"imu": _read_csv(folder / "imu.csv", IMU_COLUMNS)}
+        for key, name, cols in (
+            ("truth", "truth.csv", TRUTH_COLUMNS),
+            ("events", "events.csv", EVENT_COLUMNS),
+            ("reference", "reference.csv", REFERENCE_COLUMNS),
+        ):
+            if (folder / name).exists():
+                tables[key] = _read_csv(folder / name, cols)
+    imu = tables["imu"]
+    rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta)
+    if "truth" in tables:
+        rec.truth = Truth.from_table(tables["truth"])
+    if "events" in tables:
+        rec.events = Events.from_table(tables["events"])
+    if "reference" in tables:
+        ref = tables["reference"]
+        rec.reference = Reference(t=ref[:, 0].copy(), pos=ref[:, 1:4].copy())
+    return rec
+
+
+def list_runs(folder: str | Path) -> list[Path]:
+    """The recordings in ``folder``: itself if it is one, else its ``run-NNN`` subfolders in order."""
+    folder = Path(folder)
+    if (folder / "imu.csv").exists():
+        return [folder]
+    runs = sorted(p for p in folder.glob("run-*") if (p / "imu.csv").exists())
+    if not runs:
+        raise RecordingError(f"{folder}: neither a recording (imu.csv) nor a folder of run-NNN recordings")
+    return runs
