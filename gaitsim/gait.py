@@ -1,0 +1,202 @@
+"""Gait parameters and the stance plan: when each gait event happens and where each stance is placed.
+
+One foot is simulated. A walk is: standing (foot flat) -> for each stride: heel off, push-off (rotation about
+the toe contact), toe off, swing, initial contact (heel strike), heel rocker (rotation about the heel contact),
+foot flat -> standing at the end. Phase durations are fractions of the gait cycle (one stride of one foot).
+
+Angles: foot pitch is the rotation about the foot's left (y) axis, positive when the toes point down; the foot
+pitch at heel strike is therefore negative (toes up) and at toe off positive (heel up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .path import Path
+
+
+@dataclass(frozen=True)
+class GaitParams:
+    """Spatio-temporal gait parameters of one foot.
+
+    Attributes
+    ----------
+    cadence_steps_per_min : steps/min (two steps per stride of one foot). Default 84, the seed paper's pace.
+    stride_length_m : m, nominal heel-contact to heel-contact distance of one foot. Default 1.4 (~0.98 m/s).
+    heel_rocker_frac, foot_flat_frac, push_off_frac, swing_frac : fractions of the gait cycle, summing to 1.
+        Defaults 0.15 / 0.30 / 0.17 / 0.38: stance 62 % (anchors §7), foot flat from 15 % to 45 %.
+    pitch_heel_strike_deg : deg, foot pitch at initial contact (negative: toes up). Default -20.
+    pitch_rate_heel_strike_dps : deg/s, pitch rate at initial contact. Default 60 (forefoot starting down).
+    pitch_toe_off_deg : deg, foot pitch at toe off (heel up). Default 45.
+    pitch_rate_toe_off_dps : deg/s, pitch rate at toe off. Default 150.
+    swing_height_m : m, heel height at mid-swing. Default 0.08.
+    swing_lateral_m : m, sideways excursion of the heel at mid-swing, positive to the left. Default 0.01.
+    swing_roll_deg : deg, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3.
+    toe_out_deg : deg, foot yaw relative to the walking direction during stance (positive: toes to the left).
+        Default 0.
+    stride_length_sd_m : m, stride-to-stride standard deviation of the stride length. Default 0.02.
+    cycle_sd_frac : relative stride-to-stride standard deviation of the cycle time. Default 0.01.
+    pitch_sd_deg : deg, stride-to-stride standard deviation of the heel-strike and toe-off pitch. Default 1.
+    stand_start_s, stand_end_s : s, standing (foot flat, still) at the start and end. Default 2.0 each.
+    """
+
+    cadence_steps_per_min: float = 84.0
+    stride_length_m: float = 1.4
+    heel_rocker_frac: float = 0.15
+    foot_flat_frac: float = 0.30
+    push_off_frac: float = 0.17
+    swing_frac: float = 0.38
+    pitch_heel_strike_deg: float = -20.0
+    pitch_rate_heel_strike_dps: float = 60.0
+    pitch_toe_off_deg: float = 45.0
+    pitch_rate_toe_off_dps: float = 150.0
+    swing_height_m: float = 0.08
+    swing_lateral_m: float = 0.01
+    swing_roll_deg: float = 3.0
+    toe_out_deg: float = 0.0
+    stride_length_sd_m: float = 0.02
+    cycle_sd_frac: float = 0.01
+    pitch_sd_deg: float = 1.0
+    stand_start_s: float = 2.0
+    stand_end_s: float = 2.0
+
+    @property
+    def cycle_s(self) -> float:
+        """Nominal gait-cycle duration (s): two steps."""
+        return 120.0 / self.cadence_steps_per_min
+
+
+@dataclass(frozen=True)
+class ImpactParams:
+    """Heel strike and forefoot slap.
+
+    Attributes
+    ----------
+    heel_strike_velocity_mps : (forward, left, up) m/s, heel velocity at initial contact in the walking frame;
+        it is brought to zero over ``heel_strike_duration_s`` (heel-pad compression). Default (0.25, 0, -0.3).
+    heel_strike_duration_s : s, sharpness of the heel strike. Default 0.012.
+    slap_rate_dps : deg/s, forefoot pitch rate when the forefoot meets the ground. Default 250.
+    slap_duration_s : s, time in which the forefoot stops at foot flat (sharpness of the slap). Default 0.025.
+    """
+
+    heel_strike_velocity_mps: tuple[float, float, float] = (0.25, 0.0, -0.3)
+    heel_strike_duration_s: float = 0.012
+    slap_rate_dps: float = 250.0
+    slap_duration_s: float = 0.025
+
+
+@dataclass(frozen=True)
+class MicroMotionParams:
+    """Foot motion during stance: velocities of the contact point in the walking frame (forward, left, up).
+
+    The profile of one stance is the sum of a creep plateau over foot flat (C4 ramps of ``creep_ramp_s``
+    outside it), a settling pulse starting at foot flat and a heel-off pulse centred on heel off (pulse
+    shape 256 s^4 (1-s)^4, peak at mid-pulse). Standing at the start and end of a walk is exactly still.
+
+    Attributes
+    ----------
+    enabled : switch. Default True.
+    creep_velocity_mps : m/s during foot flat. Default (0.01, 0, 0) (seed paper Fig. 3, anchors §7).
+    creep_ramp_s : s. Default 0.05.
+    settle_velocity_mps : m/s, peak of the pulse after foot flat. Default (0.02, 0, 0).
+    settle_duration_s : s. Default 0.08.
+    heel_off_velocity_mps : m/s, peak of the pulse around heel off. Default (0.02, 0, 0.005).
+    heel_off_duration_s : s. Default 0.10.
+    rocking_pitch_deg, rocking_roll_deg : deg, amplitude of a stance micro-rotation about the heel during foot
+        flat (``amp * LIFT`` shape, one excursion). Default 0 (off).
+    """
+
+    enabled: bool = True
+    creep_velocity_mps: tuple[float, float, float] = (0.01, 0.0, 0.0)
+    creep_ramp_s: float = 0.05
+    settle_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.0)
+    settle_duration_s: float = 0.08
+    heel_off_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.005)
+    heel_off_duration_s: float = 0.10
+    rocking_pitch_deg: float = 0.0
+    rocking_roll_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class Walk:
+    """Everything that defines one walk's kinematics (before the sensor model)."""
+
+    path: Path | None  # None: standing still for ``duration_s``
+    gait: GaitParams = field(default_factory=GaitParams)
+    impact: ImpactParams = field(default_factory=ImpactParams)
+    micro: MicroMotionParams = field(default_factory=MicroMotionParams)
+    duration_s: float = 0.0  # only for standing still
+
+
+@dataclass
+class StancePlan:
+    """Event times (s), placements and per-stance pitch of every stance, stance 0 being the initial standing.
+
+    Attributes
+    ----------
+    t_ic, t_ff, t_ho, t_to : (n+1,) s. Stance 0 has t_ic = t_ff = 0; the last has t_ho = t_to = t_end.
+    pos : (n+1, 2) m, heel contact after heel-strike compression (before stance micro-motion).
+    yaw : (n+1,) rad, walking direction of each stance.
+    pitch_hs, pitch_to : (n+1,) rad, pitch at the stance's heel strike / toe off.
+    walking : (n+1,) bool, True for full gait stances (micro-motion applies), False for standing.
+    t_end : s, end of the recording.
+    """
+
+    t_ic: np.ndarray
+    t_ff: np.ndarray
+    t_ho: np.ndarray
+    t_to: np.ndarray
+    pos: np.ndarray
+    yaw: np.ndarray
+    pitch_hs: np.ndarray
+    pitch_to: np.ndarray
+    walking: np.ndarray
+    t_end: float
+
+    @property
+    def n_strides(self) -> int:
+        return len(self.t_ic) - 1
+
+
+def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
+    """Place the stances of ``walk`` along its path with seeded stride-to-stride variability.
+
+    The stride count is ``round(path length / stride length)`` (at least 1); the drawn stride lengths are
+    rescaled to end exactly at the path's end.
+    """
+    g = walk.gait
+    if walk.path is None:
+        z = np.zeros(1)
+        return StancePlan(z, z, np.full(1, walk.duration_s), np.full(1, walk.duration_s),
+                          np.zeros((1, 2)), z.copy(), z.copy(), z.copy(), np.zeros(1, bool), walk.duration_s)
+    n = max(1, int(round(walk.path.length / g.stride_length_m)))
+    strides = 1.0 + rng.standard_normal(n) * g.stride_length_sd_m / g.stride_length_m
+    s = np.concatenate([[0.0], np.cumsum(strides)]) * walk.path.length / strides.sum()
+    pos, yaw = walk.path.at(s)
+    cycles = g.cycle_s * (1.0 + g.cycle_sd_frac * rng.standard_normal(n))
+    pitch_noise = np.deg2rad(g.pitch_sd_deg) * rng.standard_normal((2, n + 1))
+
+    t_ic = np.zeros(n + 1)
+    t_ff = np.zeros(n + 1)
+    t_ho = np.zeros(n + 1)
+    t_to = np.zeros(n + 1)
+    t_ho[0] = g.stand_start_s
+    t_to[0] = t_ho[0] + g.push_off_frac * cycles[0]
+    for k in range(1, n + 1):
+        c = cycles[k - 1]
+        t_ic[k] = t_to[k - 1] + g.swing_frac * c
+        t_ff[k] = t_ic[k] + g.heel_rocker_frac * c
+        t_ho[k] = t_ff[k] + g.foot_flat_frac * c
+        t_to[k] = t_ho[k] + g.push_off_frac * (cycles[k] if k < n else c)
+    t_end = t_ff[n] + g.stand_end_s
+    t_ho[n] = t_to[n] = t_end
+    walking = np.ones(n + 1, bool)
+    walking[[0, n]] = False
+    return StancePlan(
+        t_ic, t_ff, t_ho, t_to, pos, yaw,
+        np.deg2rad(g.pitch_heel_strike_deg) + pitch_noise[0],
+        np.deg2rad(g.pitch_toe_off_deg) + pitch_noise[1],
+        walking, float(t_end),
+    )

@@ -1,0 +1,192 @@
+"""C4 joint trajectories of the kinematic foot from a stance plan.
+
+The foot body's origin is the heel contact point; the toe contact point sits ``toe_length`` ahead on the foot's
+x axis. Joints (MuJoCo chain, outermost first): slide x, y, z of the heel point in the world, then yaw (z),
+pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
+
+- Heel rocker [t_ic, t_ff]: rotation about the heel contact (fixed but for heel-strike compression and stance
+  micro-motion). Its last ``slap_duration_s`` stop the forefoot: pitch rate ``slap_rate * (1 - smoothstep)``.
+- Foot flat [t_ff, t_ho]: still, but for micro-motion (and optional rocking about the heel).
+- Push-off [t_ho, t_to]: rotation about the toe contact, whose position follows the micro-motion.
+- Swing [t_to, t_ic']: degree-9 Hermite of the heel point matching position and derivatives 1..4 at both ends,
+  plus a C4 lift (height) and sideways excursion; yaw turns to the next stance with a C4 smoothstep.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import smooth
+from .gait import StancePlan, Walk
+
+JOINTS = ("x", "y", "z", "yaw", "pitch", "roll")
+
+
+def _rot_z(yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+class FootTrajectory:
+    """Joint trajectories of one walk.
+
+    Parameters
+    ----------
+    walk : Walk
+    plan : StancePlan
+    toe_length : m, heel-to-toe contact distance of the foot model.
+    """
+
+    def __init__(self, walk: Walk, plan: StancePlan, toe_length: float):
+        self.walk, self.plan, self.toe_length = walk, plan, toe_length
+        g, imp, mm = walk.gait, walk.impact, walk.micro
+        n = plan.n_strides
+        self.walk_yaw = np.unwrap(plan.yaw)
+        self.foot_yaw = self.walk_yaw + np.deg2rad(g.toe_out_deg)
+        self.frames = [_rot_z(y) for y in self.walk_yaw]
+
+        # pitch: Hermite through knots (value, rate, 0, 0, 0)
+        slap_rate = np.deg2rad(imp.slap_rate_dps)
+        knots = [(0.0, 0.0, 0.0)]
+        for k in range(n + 1):
+            if k > 0:
+                t_slap = plan.t_ff[k] - imp.slap_duration_s
+                knots += [
+                    (plan.t_ic[k], plan.pitch_hs[k], np.deg2rad(g.pitch_rate_heel_strike_dps)),
+                    (t_slap, -0.5 * slap_rate * imp.slap_duration_s, slap_rate),
+                    (plan.t_ff[k], 0.0, 0.0),
+                ]
+            if k < n:
+                knots += [(plan.t_ho[k], 0.0, 0.0),
+                          (plan.t_to[k], plan.pitch_to[k], np.deg2rad(g.pitch_rate_toe_off_dps))]
+        knots.append((plan.t_end, 0.0, 0.0))
+        kn = np.array(knots)
+        keep = np.concatenate([[True], np.diff(kn[:, 0]) > 0])  # stance 0 starts at t = 0
+        stacks = np.zeros((keep.sum(), smooth.NDER))
+        stacks[:, :2] = kn[keep, 1:]
+        self.pitch = smooth.hermite(kn[keep, 0], stacks)
+
+        # stance contact displacement (walking frame): heel-strike compression + micro-motion
+        v_hs = np.asarray(imp.heel_strike_velocity_mps, float)
+        self.compression = v_hs * imp.heel_strike_duration_s / 2
+        self.contact: list[list[list[smooth.Piecewise]]] = []  # [stance][axis] -> pieces
+        for k in range(n + 1):
+            axes: list[list[smooth.Piecewise]] = [[], [], []]
+            if k > 0:
+                t0, t1 = plan.t_ic[k], plan.t_ic[k] + imp.heel_strike_duration_s
+                for a in range(3):
+                    axes[a].append(smooth.hermite([t0, t1], [[0, v_hs[a], 0, 0, 0], [self.compression[a], 0, 0, 0, 0]]))
+            if plan.walking[k] and mm.enabled:
+                for a in range(3):
+                    axes[a] += [
+                        smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s, mm.creep_velocity_mps[a]),
+                        smooth.pulse_displacement(plan.t_ff[k], mm.settle_duration_s, mm.settle_velocity_mps[a]),
+                        smooth.pulse_displacement(plan.t_ho[k] - mm.heel_off_duration_s / 2, mm.heel_off_duration_s,
+                                                  mm.heel_off_velocity_mps[a]),
+                    ]
+            self.contact.append(axes)
+        self.heel_base = [
+            np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
+            for k in range(n + 1)
+        ]
+        self._toe_at_heel_off = [
+            self._stance_heel(k, np.array([plan.t_ho[k]]))[:, 0, 0] + self._toe_vector(k) for k in range(n)
+        ]
+        self._swings = [self._build_swing(k) for k in range(n)]
+
+    # -- pieces ---------------------------------------------------------------------------------------------
+
+    def _toe_vector(self, k: int) -> np.ndarray:
+        return self.toe_length * np.array([np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k]), 0.0])
+
+    def _contact_stack(self, k: int, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement."""
+        local = np.zeros((3, smooth.NDER, t.size))
+        for a in range(3):
+            for piece in self.contact[k][a]:
+                local[a] += piece.stack(t)
+        return np.einsum("ij,jdn->idn", self.frames[k], local)
+
+    def _stance_heel(self, k: int, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) heel point during [t_ic, t_ho] of stance k."""
+        out = self._contact_stack(k, t)
+        out[:, 0] += self.heel_base[k][:, None]
+        return out
+
+    def _push_off_heel(self, k: int, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) heel point during [t_ho, t_to]: rotation about the (micro-moving) toe contact."""
+        out = self._contact_stack(k, t)
+        out[:, 0] -= self._contact_stack(k, np.array([self.plan.t_ho[k]]))[:, 0, :]
+        cos_s, sin_s = smooth.compose_trig(self.pitch.stack(t))
+        cy, sy = np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k])
+        out[0] -= self.toe_length * cy * cos_s
+        out[1] -= self.toe_length * sy * cos_s
+        out[2] += self.toe_length * sin_s
+        out[:, 0] += self._toe_at_heel_off[k][:, None]
+        return out
+
+    def _build_swing(self, k: int) -> list[smooth.Piecewise]:
+        t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
+        start = self._push_off_heel(k, np.array([t0]))[:, :, 0]
+        end = self._stance_heel(k + 1, np.array([t1]))[:, :, 0]
+        return [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
+
+    def _swing_heel(self, k: int, t: np.ndarray) -> np.ndarray:
+        plan, g = self.plan, self.walk.gait
+        t0, t1 = plan.t_to[k], plan.t_ic[k + 1]
+        out = np.stack([p.stack(t) for p in self._swings[k]])
+        z_mid = self._swings[k][2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
+        out[2] += smooth.lift(t, t0, t1 - t0, g.swing_height_m - z_mid)
+        mid_yaw = 0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1])
+        side = smooth.lift(t, t0, t1 - t0, g.swing_lateral_m)
+        out[0] -= np.sin(mid_yaw) * side
+        out[1] += np.cos(mid_yaw) * side
+        return out
+
+    # -- public ---------------------------------------------------------------------------------------------
+
+    def heel(self, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) derivative stacks of the heel contact point (m, world) at times ``t`` (s)."""
+        t = np.asarray(t, float)
+        plan = self.plan
+        out = np.zeros((3, smooth.NDER, t.size))
+        for k in range(plan.n_strides + 1):
+            m = (t >= plan.t_ic[k]) & (t < plan.t_ho[k]) if k < plan.n_strides else t >= plan.t_ic[k]
+            if m.any():
+                out[:, :, m] = self._stance_heel(k, t[m])
+            if k < plan.n_strides:
+                m = (t >= plan.t_ho[k]) & (t < plan.t_to[k])
+                if m.any():
+                    out[:, :, m] = self._push_off_heel(k, t[m])
+                m = (t >= plan.t_to[k]) & (t < plan.t_ic[k + 1])
+                if m.any():
+                    out[:, :, m] = self._swing_heel(k, t[m])
+        return out
+
+    def angles(self, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
+        t = np.asarray(t, float)
+        plan, g, mm = self.plan, self.walk.gait, self.walk.micro
+        yaw = np.zeros((smooth.NDER, t.size))
+        yaw[0] = self.foot_yaw[0]
+        roll = np.zeros((smooth.NDER, t.size))
+        pitch = self.pitch.stack(t)
+        for k in range(plan.n_strides):
+            dur = plan.t_ic[k + 1] - plan.t_to[k]
+            yaw += smooth.smoothstep_stack(t, plan.t_to[k], dur, 0.0, self.foot_yaw[k + 1] - self.foot_yaw[k])
+            roll += smooth.lift(t, plan.t_to[k], dur, np.deg2rad(g.swing_roll_deg))
+        if mm.enabled and (mm.rocking_pitch_deg or mm.rocking_roll_deg):
+            for k in np.flatnonzero(plan.walking):
+                dur = plan.t_ho[k] - plan.t_ff[k]
+                pitch += smooth.lift(t, plan.t_ff[k], dur, np.deg2rad(mm.rocking_pitch_deg))
+                roll += smooth.lift(t, plan.t_ff[k], dur, np.deg2rad(mm.rocking_roll_deg))
+        return np.stack([yaw, pitch, roll])
+
+    def joints(self, t: np.ndarray) -> np.ndarray:
+        """(6, 5, N) derivative stacks of the joints (x, y, z, yaw, pitch, roll) at times ``t`` (s)."""
+        return np.concatenate([self.heel(t), self.angles(t)])
+
+    def stance_displacement(self) -> np.ndarray:
+        """(n+1, 3) m: exact heel (= IMU, the attitude being equal at both ends) displacement over [t_ff, t_ho]."""
+        p = self.plan
+        return self.heel(p.t_ho)[:, 0, :].T - self.heel(p.t_ff)[:, 0, :].T

@@ -1,0 +1,256 @@
+"""Scenario files (TOML): load, validate, and turn into a :class:`Scenario`.
+
+Sections and keys (every key optional unless marked; units in the key names):
+
+``[scenario]``  name (str), description (str), seed (int >= 0, default 0), runs (int >= 1, default 1)
+``[path]``      kind = "straight" | "arc" | "polyline" | "static" (required)
+                straight: length_m (>0), yaw_deg (walking direction, CCW from east; north = 90), start_m [x, y]
+                arc:      radius_m (>= one step), turn_deg (signed, left positive), yaw_deg, start_m
+                polyline: waypoints_m [[x, y], ...] (>= 2), corner_radius_m (>= one step), closed (bool)
+                static:   duration_s (>0)
+``[gait]``      fields of :class:`gaitsim.gait.GaitParams`
+``[impact]``    fields of :class:`gaitsim.gait.ImpactParams`
+``[micromotion]`` fields of :class:`gaitsim.gait.MicroMotionParams`
+``[mount]``     fields of :class:`gaitsim.foot.Mount`
+``[sampling]``  rate_hz (>0, default 800), gravity_mps2 (>0, default 9.81)
+``[sensor]``    handed to :func:`gaitsim.imu.config.sensor_from_table` (absent: the ideal sensor)
+``[nav]``, ``[experiment]``  kept as tables for the filter and the experiment runner, which validate them.
+
+Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
+key, the value and what is allowed; nothing is written.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import path as paths
+from .errors import ScenarioError
+from .foot import MOUNTS, Mount
+from .gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+
+PATH_KEYS = {
+    "straight": {"kind", "length_m", "yaw_deg", "start_m"},
+    "arc": {"kind", "radius_m", "turn_deg", "yaw_deg", "start_m"},
+    "polyline": {"kind", "waypoints_m", "corner_radius_m", "closed"},
+    "static": {"kind", "duration_s"},
+}
+SECTIONS = {"scenario", "path", "gait", "impact", "micromotion", "mount", "sampling", "sensor", "nav", "experiment"}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario: the walk, the mount, sampling and the (unparsed-here) sensor and nav tables."""
+
+    name: str
+    walk: Walk
+    mount: Mount = field(default_factory=Mount)
+    rate_hz: float = 800.0
+    gravity: float = 9.81
+    seed: int = 0
+    runs: int = 1
+    description: str = ""
+    path_table: dict = field(default_factory=dict)
+    sensor: object | None = None  # gaitsim.imu.config.SensorSpec
+    nav: dict = field(default_factory=dict)
+    experiment: dict = field(default_factory=dict)
+    source: str = ""
+
+    def with_seed(self, seed: int) -> "Scenario":
+        return dataclasses.replace(self, seed=seed)
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _check_type(where: str, key: str, value, default):
+    """Coerce a TOML value to the type of ``default`` or raise naming key, value and the expected type."""
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ScenarioError(f"{where}: {key} = {value!r} must be true or false")
+        return value
+    if isinstance(default, int) and not isinstance(default, bool):
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise ScenarioError(f"{where}: {key} = {value!r} must be an integer")
+        return value
+    if isinstance(default, float):
+        if not _is_number(value):
+            raise ScenarioError(f"{where}: {key} = {value!r} must be a number")
+        return float(value)
+    if isinstance(default, str):
+        if not isinstance(value, str):
+            raise ScenarioError(f"{where}: {key} = {value!r} must be a string")
+        return value
+    if isinstance(default, tuple):
+        if not (isinstance(value, list) and len(value) == len(default) and all(_is_number(x) for x in value)):
+            raise ScenarioError(f"{where}: {key} = {value!r} must be a list of {len(default)} numbers")
+        return tuple(float(x) for x in value)
+    raise TypeError(f"no type rule for {key}")
+
+
+def fill(cls, table: dict, where: str):
+    """Build dataclass ``cls`` from a TOML table, refusing unknown keys and wrong types."""
+    defaults = cls()
+    names = {f.name for f in dataclasses.fields(cls)}
+    values = {}
+    for key, value in table.items():
+        if key not in names:
+            raise ScenarioError(f"{where}: unknown key {key!r}; allowed: {', '.join(sorted(names))}")
+        values[key] = _check_type(where, key, value, getattr(defaults, key))
+    return dataclasses.replace(defaults, **values)
+
+
+def _require(cond: bool, where: str, key: str, value, allowed: str):
+    if not cond:
+        raise ScenarioError(f"{where}: {key} = {value!r} is not allowed; {allowed}")
+
+
+def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where: str) -> None:
+    """Physical plausibility of the gait, impact and micro-motion parameters."""
+    _require(g.cadence_steps_per_min > 0, f"{where} [gait]", "cadence_steps_per_min", g.cadence_steps_per_min, "must be > 0")
+    _require(g.stride_length_m > 0, f"{where} [gait]", "stride_length_m", g.stride_length_m, "must be > 0")
+    fracs = {k: getattr(g, k) for k in ("heel_rocker_frac", "foot_flat_frac", "push_off_frac", "swing_frac")}
+    for k, v in fracs.items():
+        _require(0 < v < 1, f"{where} [gait]", k, v, "must lie in (0, 1)")
+    total = sum(fracs.values())
+    _require(abs(total - 1) < 1e-9, f"{where} [gait]", "phase fractions", total,
+             "heel_rocker_frac + foot_flat_frac + push_off_frac + swing_frac must add up to 1")
+    for k in ("stride_length_sd_m", "cycle_sd_frac", "pitch_sd_deg", "swing_height_m"):
+        _require(getattr(g, k) >= 0, f"{where} [gait]", k, getattr(g, k), "must be >= 0")
+    for k in ("stand_start_s", "stand_end_s"):
+        _require(getattr(g, k) >= 0.5, f"{where} [gait]", k, getattr(g, k), "must be >= 0.5 s (the filter aligns on it)")
+    _require(g.pitch_heel_strike_deg < 0, f"{where} [gait]", "pitch_heel_strike_deg", g.pitch_heel_strike_deg,
+             "must be < 0 (toes up at heel strike)")
+    _require(g.pitch_toe_off_deg > 0, f"{where} [gait]", "pitch_toe_off_deg", g.pitch_toe_off_deg, "must be > 0 (heel up)")
+    _require(g.cycle_sd_frac < 0.2, f"{where} [gait]", "cycle_sd_frac", g.cycle_sd_frac, "must be < 0.2")
+    rocker = g.heel_rocker_frac * g.cycle_s
+    _require(0 < imp.slap_duration_s < 0.8 * rocker, f"{where} [impact]", "slap_duration_s", imp.slap_duration_s,
+             f"must be > 0 and < 80% of the heel rocker ({rocker:.3f} s)")
+    _require(0 < imp.heel_strike_duration_s < rocker - imp.slap_duration_s, f"{where} [impact]",
+             "heel_strike_duration_s", imp.heel_strike_duration_s, "must be > 0 and end before the forefoot slap")
+    _require(imp.slap_rate_dps >= 0, f"{where} [impact]", "slap_rate_dps", imp.slap_rate_dps, "must be >= 0")
+    for k in ("creep_ramp_s", "settle_duration_s", "heel_off_duration_s"):
+        _require(getattr(mm, k) > 0, f"{where} [micromotion]", k, getattr(mm, k), "must be > 0")
+    push = g.push_off_frac * g.cycle_s
+    _require(mm.creep_ramp_s < min(rocker, push), f"{where} [micromotion]", "creep_ramp_s", mm.creep_ramp_s,
+             f"must be shorter than the heel rocker and push-off ({min(rocker, push):.3f} s)")
+    _require(mm.heel_off_duration_s / 2 < push, f"{where} [micromotion]", "heel_off_duration_s",
+             mm.heel_off_duration_s, "half of it must fit into the push-off")
+
+
+def build_path(table: dict, gait: GaitParams, where: str):
+    """The :class:`gaitsim.path.Path` of a [path] table (None for ``static``) and the static duration (s)."""
+    kind = table.get("kind")
+    _require(kind in PATH_KEYS, where, "kind", kind, f"allowed: {', '.join(PATH_KEYS)}")
+    for key in table:
+        if key not in PATH_KEYS[kind]:
+            raise ScenarioError(f"{where}: unknown key {key!r} for kind {kind!r}; allowed: {', '.join(sorted(PATH_KEYS[kind]))}")
+    num = lambda key, default=None: _check_type(where, key, table.get(key, default), 0.0)  # noqa: E731
+    step = gait.stride_length_m / 2
+    if kind == "static":
+        _require("duration_s" in table, where, "duration_s", None, "required for kind 'static'")
+        d = num("duration_s")
+        _require(d > 0, where, "duration_s", d, "must be > 0")
+        return None, d
+    if kind in ("straight", "arc"):
+        start = _check_type(where, "start_m", table.get("start_m", [0.0, 0.0]), (0.0, 0.0))
+        yaw = np.deg2rad(num("yaw_deg", 0.0))
+    if kind == "straight":
+        _require("length_m" in table, where, "length_m", None, "required for kind 'straight'")
+        length = num("length_m")
+        _require(length >= gait.stride_length_m, where, "length_m", length,
+                 f"must be at least one stride ({gait.stride_length_m} m)")
+        return paths.straight(length, yaw, start), 0.0
+    if kind == "arc":
+        for key in ("radius_m", "turn_deg"):
+            _require(key in table, where, key, None, "required for kind 'arc'")
+        radius, turn = num("radius_m"), num("turn_deg")
+        _require(radius >= step, where, "radius_m", radius, f"a turn radius must be at least one step ({step} m)")
+        _require(abs(turn) * np.pi / 180 * radius >= gait.stride_length_m, where, "turn_deg", turn,
+                 "the arc must be at least one stride long")
+        return paths.arc(radius, np.deg2rad(turn), yaw, start), 0.0
+    pts = table.get("waypoints_m")
+    ok = isinstance(pts, list) and len(pts) >= 2 and all(
+        isinstance(p, list) and len(p) == 2 and all(_is_number(x) for x in p) for p in pts)
+    _require(ok, where, "waypoints_m", pts, "must be a list of at least two [x, y] points (m)")
+    radius = num("corner_radius_m", 1.0)
+    _require(radius >= step, where, "corner_radius_m", radius, f"a turn radius must be at least one step ({step} m)")
+    w = np.array(pts, float)
+    if _check_type(where, "closed", table.get("closed", False), False):
+        w = np.vstack([w, w[:1]])
+    _require(bool(np.all(np.linalg.norm(np.diff(w, axis=0), axis=1) > 0)), where, "waypoints_m", pts,
+             "consecutive waypoints must differ")
+    try:
+        path = paths.polyline(w, radius)
+    except ValueError as exc:
+        raise ScenarioError(f"{where}: corner_radius_m = {radius}: {exc}") from None
+    _require(path.length >= gait.stride_length_m, where, "waypoints_m", pts, "the path must be at least one stride long")
+    return path, 0.0
+
+
+def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
+    """Validate a parsed TOML document (see the module docstring) into a :class:`Scenario`."""
+    for section in doc:
+        if section not in SECTIONS:
+            raise ScenarioError(f"{source}: unknown section [{section}]; allowed: {', '.join(sorted(SECTIONS))}")
+        if not isinstance(doc[section], dict):
+            raise ScenarioError(f"{source}: {section} must be a table [{section}]")
+    head = doc.get("scenario", {})
+    allowed = {"name", "description", "seed", "runs"}
+    for key in head:
+        _require(key in allowed, f"{source} [scenario]", key, head[key], f"unknown key; allowed: {', '.join(sorted(allowed))}")
+    name = _check_type(f"{source} [scenario]", "name", head.get("name", Path(source).stem), "")
+    seed = _check_type(f"{source} [scenario]", "seed", head.get("seed", 0), 0)
+    runs = _check_type(f"{source} [scenario]", "runs", head.get("runs", 1), 0)
+    _require(seed >= 0, f"{source} [scenario]", "seed", seed, "must be >= 0")
+    _require(runs >= 1, f"{source} [scenario]", "runs", runs, "must be >= 1")
+
+    gait = fill(GaitParams, doc.get("gait", {}), f"{source} [gait]")
+    impact = fill(ImpactParams, doc.get("impact", {}), f"{source} [impact]")
+    micro = fill(MicroMotionParams, doc.get("micromotion", {}), f"{source} [micromotion]")
+    validate_gait(gait, impact, micro, source)
+    mount = fill(Mount, doc.get("mount", {}), f"{source} [mount]")
+    _require(mount.site in MOUNTS, f"{source} [mount]", "site", mount.site, f"allowed: {', '.join(MOUNTS)}")
+    sampling = doc.get("sampling", {})
+    for key in sampling:
+        _require(key in ("rate_hz", "gravity_mps2"), f"{source} [sampling]", key, sampling[key],
+                 "unknown key; allowed: gravity_mps2, rate_hz")
+    rate = _check_type(f"{source} [sampling]", "rate_hz", sampling.get("rate_hz", 800.0), 0.0)
+    gravity = _check_type(f"{source} [sampling]", "gravity_mps2", sampling.get("gravity_mps2", 9.81), 0.0)
+    _require(rate >= 50, f"{source} [sampling]", "rate_hz", rate, "must be >= 50 Hz")
+    _require(gravity > 0, f"{source} [sampling]", "gravity_mps2", gravity, "must be > 0")
+
+    if "path" not in doc:
+        raise ScenarioError(f"{source}: missing section [path] (kind = straight | arc | polyline | static)")
+    path, duration = build_path(doc["path"], gait, f"{source} [path]")
+    sensor = None
+    if "sensor" in doc:
+        from .imu.config import sensor_from_table
+
+        sensor = sensor_from_table(doc["sensor"], where=f"{source} [sensor]")
+    return Scenario(
+        name=name, walk=Walk(path=path, gait=gait, impact=impact, micro=micro, duration_s=duration),
+        mount=mount, rate_hz=rate, gravity=gravity, seed=seed, runs=runs,
+        description=_check_type(f"{source} [scenario]", "description", head.get("description", ""), ""),
+        path_table=dict(doc["path"]), sensor=sensor, nav=dict(doc.get("nav", {})),
+        experiment=dict(doc.get("experiment", {})), source=source,
+    )
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            doc = tomllib.load(fh)
+    except FileNotFoundError:
+        raise ScenarioError(f"{path}: scenario file not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    return scenario_from_dict(doc, str(path))

@@ -1,0 +1,136 @@
+"""C4-smooth building blocks for the gait profiles.
+
+Every joint trajectory of the foot is assembled from these pieces so that position is continuous through its
+4th derivative everywhere (anchors §4: C2 joins cap strapdown consistency at ~9 mm per 10 s).
+
+A *derivative stack* is an array ``(5, N)``: row ``j`` holds the j-th time derivative at N sample times.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.polynomial import polynomial as P
+from scipy.interpolate import BPoly, PPoly
+
+ORDER = 4  # highest derivative kept continuous
+NDER = ORDER + 1
+
+# s^5 (126 - 420 s + 540 s^2 - 315 s^3 + 70 s^4): 0 -> 1 on [0, 1], derivatives 1..4 vanish at both ends
+SMOOTHSTEP = np.array([0, 0, 0, 0, 0, 126, -420, 540, -315, 70], float)
+# 256 s^4 (1-s)^4: bump with peak 1 at s = 1/2, derivatives 0..3 vanish at both ends (a C3 velocity pulse
+# whose integral, a displacement, is C4)
+PULSE = 256.0 * P.polymul(P.polypow([0, 1], 4), P.polypow([1, -1], 4))
+# 1024 s^5 (1-s)^5: bump with peak 1 at s = 1/2, derivatives 0..4 vanish at both ends (a C4 displacement)
+LIFT = 1024.0 * P.polymul(P.polypow([0, 1], 5), P.polypow([1, -1], 5))
+PULSE_AREA = float(P.polyval(1.0, P.polyint(PULSE)))  # integral of PULSE over [0, 1] = 256 * B(5, 5)
+
+
+class Piecewise:
+    """A scalar C4 function of time built from a :class:`scipy.interpolate.PPoly`, held constant outside.
+
+    Parameters
+    ----------
+    pp : PPoly
+        The function on its breakpoint range ``[pp.x[0], pp.x[-1]]``.
+    """
+
+    def __init__(self, pp: PPoly):
+        self.pp = pp
+        self.t0 = float(pp.x[0])
+        self.t1 = float(pp.x[-1])
+        self.before = float(pp(self.t0))
+        self.after = float(pp(self.t1))
+
+    def stack(self, t: np.ndarray) -> np.ndarray:
+        """Derivative stack (5, N) at times ``t`` (s). Outside the range: held value, zero derivatives."""
+        t = np.asarray(t, float)
+        out = np.zeros((NDER, t.size))
+        inside = (t >= self.t0) & (t <= self.t1)
+        ti = t[inside]
+        for j in range(NDER):
+            out[j, inside] = self.pp(ti, nu=j)
+        out[0, t < self.t0] = self.before
+        out[0, t > self.t1] = self.after
+        return out
+
+
+def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
+    """Piecewise degree-9 polynomial through ``knots`` (s) matching value and derivatives 1..4 at each knot.
+
+    Parameters
+    ----------
+    knots : (K,) increasing times (s).
+    stacks : (K, 5) value and derivatives 1..4 at each knot (unit/s^j).
+    """
+    bp = BPoly.from_derivatives(np.asarray(knots, float), [list(s) for s in np.asarray(stacks, float)])
+    return Piecewise(PPoly.from_bernstein_basis(bp))
+
+
+def scaled_poly(shape: np.ndarray, t0: float, duration: float, amplitude: float) -> PPoly:
+    """``amplitude * shape((t - t0) / duration)`` on [t0, t0 + duration] as a one-piece PPoly."""
+    powers = duration ** -np.arange(len(shape), dtype=float)
+    coef = (amplitude * shape * powers)[::-1][:, None]  # PPoly wants highest power first
+    return PPoly(coef, [t0, t0 + duration])
+
+
+def pulse_displacement(t0: float, duration: float, peak_velocity: float) -> Piecewise:
+    """Displacement (m) of a C3 velocity pulse ``peak_velocity * PULSE`` over [t0, t0 + duration].
+
+    The displacement is 0 before ``t0`` and ``peak_velocity * duration * PULSE_AREA`` after the pulse.
+    """
+    return Piecewise(scaled_poly(PULSE, t0, duration, peak_velocity).antiderivative())
+
+
+def plateau_displacement(t_up: float, t_down: float, ramp: float, velocity: float) -> Piecewise:
+    """Displacement (m) of a velocity plateau: C4 ramp up on [t_up - ramp, t_up], hold, ramp down on
+    [t_down, t_down + ramp]. The velocity is ``velocity`` (m/s) on [t_up, t_down]."""
+    up = scaled_poly(SMOOTHSTEP, t_up - ramp, ramp, velocity)
+    down = scaled_poly(-SMOOTHSTEP, t_down, ramp, velocity)
+    down.c[-1, 0] += velocity  # 1 - smoothstep
+    hold = PPoly(np.array([[velocity]]), [t_up, t_down])
+    coef = np.zeros((len(SMOOTHSTEP), 3))
+    coef[:, 0] = up.c[:, 0]
+    coef[-1, 1] = hold.c[0, 0]
+    coef[:, 2] = down.c[:, 0]
+    vel = PPoly(coef, [t_up - ramp, t_up, t_down, t_down + ramp])
+    return Piecewise(vel.antiderivative())
+
+
+def lift(t: np.ndarray, t0: float, duration: float, height: float) -> np.ndarray:
+    """Derivative stack (5, N) of ``height * LIFT((t - t0)/duration)``, zero outside the interval."""
+    return Piecewise(scaled_poly(LIFT, t0, duration, height)).stack(t)
+
+
+def smoothstep_stack(t: np.ndarray, t0: float, duration: float, start: float, end: float) -> np.ndarray:
+    """Derivative stack of a C4 transition from ``start`` to ``end`` over [t0, t0 + duration]."""
+    pp = scaled_poly(SMOOTHSTEP, t0, duration, end - start)
+    pp.c[-1, 0] += start
+    return Piecewise(pp).stack(t)
+
+
+def compose_trig(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Derivative stacks of ``cos(theta(t))`` and ``sin(theta(t))`` from the stack of ``theta`` (Faà di Bruno).
+
+    Parameters
+    ----------
+    theta : (5, N) derivative stack of an angle (rad, rad/s, ...).
+
+    Returns
+    -------
+    cos_stack, sin_stack : (5, N) each.
+    """
+    th, t1, t2, t3, t4 = theta
+    c, s = np.cos(th), np.sin(th)
+
+    def chain(f0, f1, f2, f3, f4):
+        return np.stack(
+            [
+                f0,
+                f1 * t1,
+                f2 * t1**2 + f1 * t2,
+                f3 * t1**3 + 3 * f2 * t1 * t2 + f1 * t3,
+                f4 * t1**4 + 6 * f3 * t1**2 * t2 + f2 * (4 * t1 * t3 + 3 * t2**2) + f1 * t4,
+            ]
+        )
+
+    return chain(c, -s, -c, s, c), chain(s, c, -s, -c, s)

@@ -1,0 +1,135 @@
+"""Scenario validation (every documented error, nothing written) and recording round trips."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitsim.cli import main
+from gaitsim.errors import ScenarioError
+from gaitsim.generate import generate
+from gaitsim.scenario import load_scenario, scenario_from_dict
+from nav.recording import TRUTH_COLUMNS, read_recording
+
+ROOT = Path(__file__).resolve().parents[1]
+
+GOOD = """
+[scenario]
+name = "tiny"
+seed = 3
+[path]
+kind = "straight"
+length_m = 4.2
+yaw_deg = 45.0
+[gait]
+stand_start_s = 0.6
+stand_end_s = 0.6
+[sampling]
+rate_hz = 200.0
+"""
+
+BAD = {
+    "unknown key": ('[gait]\ncadense_steps_per_min = 90.0', "unknown key 'cadense_steps_per_min'"),
+    "unknown section": ('[gate]\ncadence_steps_per_min = 90.0', "unknown section [gate]"),
+    "wrong type": ('[gait]\ncadence_steps_per_min = "fast"', "must be a number"),
+    "zero cadence": ("[gait]\ncadence_steps_per_min = 0.0", "cadence_steps_per_min = 0.0"),
+    "negative length": ('[path]\nkind = "straight"\nlength_m = -5.0', "length_m = -5.0"),
+    "phase sum": ("[gait]\nswing_frac = 0.5", "must add up to 1"),
+    "tight turn": ('[path]\nkind = "arc"\nradius_m = 0.3\nturn_deg = 90.0', "radius_m = 0.3"),
+    "tight corner": ('[path]\nkind = "polyline"\nwaypoints_m = [[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]]\ncorner_radius_m = 0.2',
+                     "corner_radius_m = 0.2"),
+    "unknown path kind": ('[path]\nkind = "spiral"', "kind = 'spiral'"),
+    "bad mount": ('[mount]\nsite = "ankle"', "site = 'ankle'"),
+    "bad vector": ("[micromotion]\ncreep_velocity_mps = [0.01, 0.0]", "list of 3 numbers"),
+    "low rate": ("[sampling]\nrate_hz = 10.0", "rate_hz = 10.0"),
+    "slap too long": ("[impact]\nslap_duration_s = 0.5", "slap_duration_s = 0.5"),
+    "negative seed": ("[scenario]\nseed = -1", "seed = -1"),
+}
+
+
+def _merge(base: str, patch: str) -> str:
+    """Replace the sections of ``base`` that ``patch`` defines."""
+    import tomllib
+
+    doc = tomllib.loads(base)
+    new = tomllib.loads(patch)
+    for k, v in new.items():
+        if k == "path" or k not in doc:
+            doc[k] = v
+        else:
+            doc[k].update(v)
+    out = []
+    for section, table in doc.items():
+        out.append(f"[{section}]")
+        for key, value in table.items():
+            out.append(f"{key} = {_toml(value)}")
+    return "\n".join(out) + "\n"
+
+
+def _toml(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return f'"{v}"'
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml(x) for x in v) + "]"
+    return repr(v)
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_scenario_is_refused_naming_the_key_and_writes_nothing(case, tmp_path, capsys):
+    patch, message = BAD[case]
+    f = tmp_path / "bad.toml"
+    f.write_text(_merge(GOOD, patch))
+    with pytest.raises(ScenarioError, match=None) as info:
+        load_scenario(f)
+    assert message in str(info.value) and str(f) in str(info.value)
+    out = tmp_path / "out"
+    assert main(["generate", str(f), "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists() and not any(p.name.startswith(".out") for p in tmp_path.iterdir())
+
+
+def test_good_scenario_loads_with_units():
+    f = load_scenario(ROOT / "scenarios/straight_100m.toml")
+    assert f.walk.path.length == pytest.approx(99.6)
+    assert f.rate_hz == 800.0 and f.walk.gait.cadence_steps_per_min == 84.0
+
+
+def test_round_trip_csv_and_binary_identical(tmp_path):
+    scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
+    (rec,) = generate(scen, tmp_path / "rec")
+    for binary in (True, False):
+        back = read_recording(tmp_path / "rec", prefer_binary=binary)
+        np.testing.assert_array_equal(back.t, rec.t)
+        np.testing.assert_array_equal(back.acc, rec.acc)
+        np.testing.assert_array_equal(back.gyr, rec.gyr)
+        np.testing.assert_array_equal(back.truth.as_table(), rec.truth.as_table())
+        np.testing.assert_array_equal(back.events.as_table(), rec.events.as_table())
+        assert back.meta["seed"] == 3 and back.meta["gait"]["stride_length_m"] == 1.4
+    header = (tmp_path / "rec/truth.csv").read_text().splitlines()[0]
+    assert header == ",".join(TRUTH_COLUMNS)
+
+
+def test_multi_run_output_and_refusal_to_clobber(tmp_path):
+    scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
+    recs = generate(scen, tmp_path / "many", runs=3)
+    assert sorted(p.name for p in (tmp_path / "many").iterdir()) == ["run-000", "run-001", "run-002"]
+    assert not np.array_equal(recs[0].events.t_ic, recs[1].events.t_ic)  # runs differ in stride variability
+    with pytest.raises(FileExistsError):
+        generate(scen, tmp_path / "many", runs=1)
+    assert len(list((tmp_path / "many").iterdir())) == 3
+
+
+def test_interrupted_generation_leaves_nothing(tmp_path, monkeypatch):
+    import gaitsim.generate as gen
+
+    scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(gen, "write_recording_into", boom)
+    with pytest.raises(KeyboardInterrupt):
+        gen.generate(scen, tmp_path / "rec")
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,209 @@
+"""Laws the ground-truth simulator must obey: gravity, rigid-body kinematics, C4 joins, strapdown consistency,
+micro-motion integrals, turns and closure, determinism."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from gaitsim import smooth
+from gaitsim.foot import FootModel, Mount
+from gaitsim.gait import plan_stances
+from gaitsim.profile import FootTrajectory
+from gaitsim.scenario import load_scenario, scenario_from_dict
+from gaitsim.truth import run_generators, simulate_walk
+from nav import quaternion as Q
+from strapdown_reference import integrate_increments, rk4_windows
+
+ROOT = Path(__file__).resolve().parents[1]
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def straight():
+    return simulate_walk(load_scenario(ROOT / "scenarios/straight_100m.toml"))
+
+
+def short_walk(**sections):
+    doc = {"path": {"kind": "straight", "length_m": 7.0, "yaw_deg": 30.0}, "gait": {"stand_start_s": 1.0, "stand_end_s": 1.0}}
+    for key, table in sections.items():
+        if key == "path":
+            doc["path"] = table
+        else:
+            doc.setdefault(key, {}).update(table)
+    return scenario_from_dict(doc, "test")
+
+
+def test_static_foot_reads_gravity_and_zero_rate():
+    foot = FootModel()
+    s = foot.sample(np.zeros((1, 6)), np.zeros((1, 6)), np.zeros((1, 6)))
+    np.testing.assert_allclose(s.acc[0], [0, 0, G], atol=1e-12)
+    np.testing.assert_allclose(s.gyr[0], 0, atol=1e-15)
+
+
+@pytest.mark.parametrize("pitch_deg, roll_deg", [(17.0, 0.0), (-30.0, 12.0)])
+def test_tilted_foot_reads_rotated_gravity(pitch_deg, roll_deg):
+    foot = FootModel()
+    qpos = np.array([[0.1, -0.2, 0.05, 0.7, np.deg2rad(pitch_deg), np.deg2rad(roll_deg)]])
+    s = foot.sample(qpos, np.zeros((1, 6)), np.zeros((1, 6)))
+    c = Q.to_matrix(Q.from_euler_zyx(0.7, np.deg2rad(pitch_deg), np.deg2rad(roll_deg)))
+    np.testing.assert_allclose(s.acc[0], c.T @ [0, 0, G], atol=1e-12)
+    np.testing.assert_allclose(s.quat[0], Q.from_euler_zyx(0.7, np.deg2rad(pitch_deg), np.deg2rad(roll_deg)), atol=1e-12)
+
+
+def test_mujoco_sensors_equal_rigid_body_formulas():
+    """MuJoCo's site accelerometer and gyro equal p'' + a x r + w x (w x r) - g and R^T w from the joint stacks."""
+    scen = short_walk(mount={"site": "instep", "offset_m": [0.01, -0.02, 0.0], "rpy_deg": [5.0, -3.0, 10.0]})
+    foot = FootModel(scen.mount)
+    plan = plan_stances(scen.walk, run_generators(3)[0])
+    traj = FootTrajectory(scen.walk, plan, foot.toe_length)
+    t = np.linspace(0.0, plan.t_end, 3001)
+    j = traj.joints(t)
+    s = foot.sample(j[:, 0].T, j[:, 1].T, j[:, 2].T)
+    (yaw, pitch, roll) = j[3:, 0]
+    (dyaw, dpitch, droll) = j[3:, 1]
+    (ddyaw, ddpitch, ddroll) = j[3:, 2]
+    rz = Q.to_matrix(Q.from_euler_zyx(yaw, 0 * yaw, 0 * yaw))
+    rzy = Q.to_matrix(Q.from_euler_zyx(yaw, pitch, 0 * yaw))
+    r = Q.to_matrix(Q.from_euler_zyx(yaw, pitch, roll))
+    ez = np.array([0, 0, 1.0])
+    ey = rz[:, :, 1]
+    ex = rzy[:, :, 0]
+    w_zy = dyaw[:, None] * ez + dpitch[:, None] * ey
+    w = w_zy + droll[:, None] * ex
+    alpha = (ddyaw[:, None] * ez + ddpitch[:, None] * ey + dpitch[:, None] * np.cross(dyaw[:, None] * ez, ey)
+             + ddroll[:, None] * ex + droll[:, None] * np.cross(w_zy, ex))
+    lever = np.einsum("nij,j->ni", r, foot.lever_arm)
+    a = j[:3, 2].T + np.cross(alpha, lever) + np.cross(w, np.cross(w, lever))
+    site = Q.to_matrix(s.quat)
+    f_expected = np.einsum("nji,nj->ni", site, a - [0, 0, -G])
+    w_expected = np.einsum("nji,nj->ni", site, w)
+    assert np.abs(s.acc - f_expected).max() < 1e-9 * np.abs(f_expected).max()
+    assert np.abs(s.gyr - w_expected).max() < 1e-10 * np.abs(w_expected).max()
+
+
+def test_joint_trajectories_are_c4_at_every_knot():
+    scen = short_walk(micromotion={"rocking_pitch_deg": 0.5, "rocking_roll_deg": 0.3},
+                      path={"kind": "arc", "radius_m": 5.0, "turn_deg": 80.0, "yaw_deg": 0.0})
+    plan = plan_stances(scen.walk, run_generators(5)[0])
+    traj = FootTrajectory(scen.walk, plan, 0.2)
+    imp, mm = scen.walk.impact, scen.walk.micro
+    knots = np.concatenate([
+        plan.t_ic, plan.t_ff, plan.t_ho, plan.t_to, plan.t_ff - imp.slap_duration_s,
+        plan.t_ic + imp.heel_strike_duration_s, plan.t_ff - mm.creep_ramp_s, plan.t_ho + mm.creep_ramp_s,
+        plan.t_ff + mm.settle_duration_s, plan.t_ho - mm.heel_off_duration_s / 2, plan.t_ho + mm.heel_off_duration_s / 2,
+    ])
+    knots = knots[(knots > 1e-3) & (knots < plan.t_end - 1e-3)]
+    eps = 1e-9
+    jumps = np.abs(traj.joints(knots + eps) - traj.joints(knots - eps)).max(axis=2)  # (6, 5)
+    scale = np.abs(traj.joints(np.linspace(0, plan.t_end, 20001))).max(axis=2) + 1e-12
+    assert (jumps / scale).max() < 1e-5, jumps / scale
+
+
+def test_exact_increments_reproduce_the_99m_walk_within_1mm(straight):
+    tr = straight.truth
+    dt = tr.t[1] - tr.t[0]
+    _, _, p = integrate_increments(tr.quat[0], tr.vel[0], tr.pos[0], tr.dv[:-1], tr.dth[:-1], dt)
+    assert np.linalg.norm(p - tr.pos[-1]) < 1e-3
+
+
+def test_rk4_on_point_samples_stays_within_5mm_per_10s(straight):
+    tr = straight.truth
+    dt = tr.t[1] - tr.t[0]
+    m = int(round(10.0 / dt)) + 4
+    starts = np.arange(0, len(tr.t) - m, m)
+    idx = starts[:, None] + np.arange(m)
+    q, v, p = rk4_windows(tr.quat[starts + 1], tr.vel[starts + 1], tr.pos[starts + 1], tr.gyr[idx], tr.acc[idx], dt)
+    err = np.linalg.norm(p - tr.pos[starts + m - 3], axis=1)
+    assert err.max() < 5e-3, err
+
+
+def _profile_integral(t0, t1, ff, ho, mm, axis):
+    """Integral over [t0, t1] of the configured micro-motion velocity, written from the documented shapes."""
+    step = lambda s: np.clip(s, 0, 1) ** 5 * (126 - 420 * s + 540 * s**2 - 315 * s**3 + 70 * s**4)  # noqa: E731
+    pulse = lambda s: np.where((s > 0) & (s < 1), 256 * s**4 * (1 - s) ** 4, 0.0)  # noqa: E731
+
+    def v(t):
+        up = step((t - ff + mm.creep_ramp_s) / mm.creep_ramp_s) if t < ff else 1.0
+        down = 1 - step((t - ho) / mm.creep_ramp_s) if t > ho else 1.0
+        plateau = mm.creep_velocity_mps[axis] * (up if t < ff else down)
+        return (plateau + mm.settle_velocity_mps[axis] * pulse((t - ff) / mm.settle_duration_s)
+                + mm.heel_off_velocity_mps[axis] * pulse((t - ho + mm.heel_off_duration_s / 2) / mm.heel_off_duration_s))
+
+    return quad(v, t0, t1, points=[ff, ho], limit=200, epsabs=1e-13)[0]
+
+
+def test_stance_displacement_equals_integral_of_configured_velocity(straight):
+    scen = load_scenario(ROOT / "scenarios/straight_100m.toml")
+    mm = scen.walk.micro
+    ev = straight.events
+    yaw = np.deg2rad(90.0)
+    for k in range(1, len(ev.t_ic) - 1, 7):
+        local = [_profile_integral(ev.t_ff[k], ev.t_ho[k], ev.t_ff[k], ev.t_ho[k], mm, a) for a in range(3)]
+        expected = [np.cos(yaw) * local[0] - np.sin(yaw) * local[1], np.sin(yaw) * local[0] + np.cos(yaw) * local[1], local[2]]
+        np.testing.assert_allclose(ev.stance_displacement[k], expected, atol=1e-6)
+    # and the recorded IMU trajectory moves by that much between the nearest samples (to sampling resolution)
+    tr = straight.truth
+    k = 10
+    i0, i1 = np.searchsorted(tr.t, [ev.t_ff[k], ev.t_ho[k]])
+    assert np.linalg.norm(tr.pos[i1] - tr.pos[i0] - ev.stance_displacement[k]) < 0.02 * 1.3e-3 + 1e-5
+
+
+def test_without_micromotion_the_stance_is_exactly_still():
+    rec = simulate_walk(short_walk(micromotion={"enabled": False}))
+    tr = rec.truth
+    assert tr.stance.sum() > 0.3 * len(tr.t)
+    assert np.abs(tr.vel[tr.stance]).max() < 1e-12
+    assert np.abs(tr.gyr[tr.stance]).max() < 1e-12
+    np.testing.assert_allclose(rec.events.stance_displacement, 0, atol=1e-12)
+
+
+def test_arc_heading_after_n_strides_is_n_times_the_turn():
+    radius, turn_deg = 8.0, 90.0
+    rec = simulate_walk(short_walk(path={"kind": "arc", "radius_m": radius, "turn_deg": turn_deg, "yaw_deg": 0.0},
+                                   gait={"stride_length_sd_m": 0.0}))
+    ev, tr = rec.events, rec.truth
+    n = len(ev.t_ic) - 1
+    per_stride = np.deg2rad(turn_deg) / n
+    for k in (1, n // 2, n):
+        i = np.searchsorted(tr.t, ev.t_ff[k] + 0.05)
+        yaw = Q.to_euler_zyx(tr.quat[i])[0]
+        assert abs(np.angle(np.exp(1j * (yaw - k * per_stride)))) < 1e-12
+
+
+def test_closed_loop_closes():
+    scen = load_scenario(ROOT / "scenarios/loop_turns.toml")
+    rec = simulate_walk(scen)
+    tr = rec.truth
+    foot = FootModel(scen.mount)
+    heel = tr.pos - Q.rotate(tr.quat, foot.lever_arm)
+    np.testing.assert_allclose(heel[-1, :2], heel[0, :2], atol=1e-9)
+    ev = rec.events
+    yaw = np.unwrap(Q.to_euler_zyx(tr.quat[np.searchsorted(tr.t, ev.t_ff + 0.05)])[0])
+    turns = np.diff(yaw)
+    assert turns.max() > 0.3 and turns.min() < -0.3  # both left and right turns
+
+
+def test_same_seed_same_walk_other_seed_other_strides():
+    scen = short_walk()
+    a, b, c = simulate_walk(scen, seed=4), simulate_walk(scen, seed=4), simulate_walk(scen, seed=5)
+    np.testing.assert_array_equal(a.truth.as_table(), b.truth.as_table())
+    assert not np.allclose(np.diff(a.events.t_ic), np.diff(c.events.t_ic))
+
+
+def test_default_walk_peaks_and_spectrum(straight):
+    """Default impacts give 5-15 g peaks with the energy mostly below 80 Hz (anchors §7)."""
+    tr = straight.truth
+    mag = np.linalg.norm(tr.acc, axis=1)
+    assert 5 * G < mag.max() < 15 * G
+    a = mag[tr.t > 2.5] - mag[tr.t > 2.5].mean()
+    spec = np.abs(np.fft.rfft(a)) ** 2
+    f = np.fft.rfftfreq(a.size, tr.t[1] - tr.t[0])
+    assert spec[f > 80].sum() / spec.sum() < 0.02
+
+
+def test_smoothstep_and_pulse_shapes():
+    s = np.linspace(0, 1, 11)
+    np.testing.assert_allclose(np.polynomial.polynomial.polyval(s, smooth.SMOOTHSTEP)[[0, -1]], [0, 1])
+    assert smooth.PULSE_AREA == pytest.approx(256 / 630, rel=1e-12)  # 256 * B(5, 5)
