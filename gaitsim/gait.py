@@ -104,8 +104,10 @@ class MicroMotionParams:
     settle_duration_s : s. Default 0.08.
     heel_off_velocity_mps : m/s, peak of the pulse around heel off. Default (0.02, 0, 0.005).
     heel_off_duration_s : s. Default 0.10.
-    rocking_pitch_deg, rocking_roll_deg : deg, amplitude of a stance micro-rotation about the heel during foot
-        flat (``amp * LIFT`` shape, one excursion). Default 0 (off).
+    stance_roll_rate_dps : deg/s, stance roll-over (pronation, then supination) about the heel-toe axis: the
+        roll rate is +rate at foot flat, falls linearly through zero at mid foot-flat to -rate at heel off, and
+        rises from / returns to zero over the heel rocker / push-off (C4). Rolling about the contact axis moves
+        neither contact point. Core-stance mean |rate| is rate/2. Default 0 (a still foot flat).
     """
 
     enabled: bool = True
@@ -115,8 +117,7 @@ class MicroMotionParams:
     settle_duration_s: float = 0.08
     heel_off_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.005)
     heel_off_duration_s: float = 0.10
-    rocking_pitch_deg: float = 0.0
-    rocking_roll_deg: float = 0.0
+    stance_roll_rate_dps: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,8 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 
 - Heel rocker [t_ic, t_ff]: rotation about the heel contact (fixed but for heel-strike compression and stance
   micro-motion). Its last ``slap_duration_s`` stop the forefoot: pitch rate ``slap_rate * (1 - smoothstep)``.
-- Foot flat [t_ff, t_ho]: still, but for micro-motion (and optional rocking about the heel).
+- Foot flat [t_ff, t_ho]: still, but for micro-motion and the optional stance roll-over (roll about the
+  heel-toe axis, which moves neither contact point).
 - Push-off [t_ho, t_to]: rotation about the toe contact, whose position follows the micro-motion.
 - Swing [t_to, t_ic']: degree-9 Hermite of the heel point matching position and derivatives 1..4 at both ends,
   plus a C4 lift (height) and sideways excursion; yaw turns to the next stance with a C4 smoothstep.
@@ -93,6 +94,23 @@ class FootTrajectory:
             self._stance_heel(k, np.array([plan.t_ho[k]]))[:, 0, 0] + self._toe_vector(k) for k in range(n)
         ]
         self._swings = [self._build_swing(k) for k in range(n)]
+        self.stance_roll = self._build_stance_roll()
+
+    def _build_stance_roll(self) -> smooth.Piecewise | None:
+        """Roll-over of the walking stances: rate +w at t_ff falling linearly to -w at t_ho (a quadratic angle),
+        joined C4 to zero at t_ic and t_to."""
+        plan, mm = self.plan, self.walk.micro
+        rate = np.deg2rad(mm.stance_roll_rate_dps)
+        if not (mm.enabled and rate and plan.walking.any()):
+            return None
+        knots, stacks = [], []
+        for k in np.flatnonzero(plan.walking):
+            flat = plan.t_ho[k] - plan.t_ff[k]
+            edge = rate * (plan.t_ff[k] - plan.t_ic[k]) / 2  # roll reached at foot flat
+            knots += [plan.t_ic[k], plan.t_ff[k], plan.t_ho[k], plan.t_to[k]]
+            stacks += [[0, 0, 0, 0, 0], [edge, rate, -2 * rate / flat, 0, 0],
+                       [edge, -rate, -2 * rate / flat, 0, 0], [0, 0, 0, 0, 0]]
+        return smooth.hermite(np.array(knots), np.array(stacks, float))
 
     # -- pieces ---------------------------------------------------------------------------------------------
 
@@ -175,11 +193,8 @@ class FootTrajectory:
             dur = plan.t_ic[k + 1] - plan.t_to[k]
             yaw += smooth.smoothstep_stack(t, plan.t_to[k], dur, 0.0, self.foot_yaw[k + 1] - self.foot_yaw[k])
             roll += smooth.lift(t, plan.t_to[k], dur, np.deg2rad(g.swing_roll_deg))
-        if mm.enabled and (mm.rocking_pitch_deg or mm.rocking_roll_deg):
-            for k in np.flatnonzero(plan.walking):
-                dur = plan.t_ho[k] - plan.t_ff[k]
-                pitch += smooth.lift(t, plan.t_ff[k], dur, np.deg2rad(mm.rocking_pitch_deg))
-                roll += smooth.lift(t, plan.t_ff[k], dur, np.deg2rad(mm.rocking_roll_deg))
+        if self.stance_roll is not None:
+            roll += self.stance_roll.stack(t)
         return np.stack([yaw, pitch, roll])
 
     def joints(self, t: np.ndarray) -> np.ndarray:

@@ -84,7 +84,7 @@ def test_mujoco_sensors_equal_rigid_body_formulas():
 
 
 def test_joint_trajectories_are_c4_at_every_knot():
-    scen = short_walk(micromotion={"rocking_pitch_deg": 0.5, "rocking_roll_deg": 0.3},
+    scen = short_walk(micromotion={"stance_roll_rate_dps": 20.0},
                       path={"kind": "arc", "radius_m": 5.0, "turn_deg": 80.0, "yaw_deg": 0.0})
     plan = plan_stances(scen.walk, run_generators(5)[0])
     traj = FootTrajectory(scen.walk, plan, 0.2)
@@ -207,3 +207,18 @@ def test_smoothstep_and_pulse_shapes():
     s = np.linspace(0, 1, 11)
     np.testing.assert_allclose(np.polynomial.polynomial.polyval(s, smooth.SMOOTHSTEP)[[0, -1]], [0, 1])
     assert smooth.PULSE_AREA == pytest.approx(256 / 630, rel=1e-12)  # 256 * B(5, 5)
+
+
+def test_stance_roll_over_rate_is_linear_through_foot_flat():
+    rate = 18.0
+    rec = simulate_walk(short_walk(micromotion={"stance_roll_rate_dps": rate}, gait={"stride_length_sd_m": 0.0}))
+    tr, ev = rec.truth, rec.events
+    k = 2
+    m = (tr.t >= ev.t_ff[k]) & (tr.t <= ev.t_ho[k])
+    s = (tr.t[m] - ev.t_ff[k]) / (ev.t_ho[k] - ev.t_ff[k])
+    # pitch and yaw are still in foot flat, so the body rate is the roll rate about x
+    np.testing.assert_allclose(np.rad2deg(tr.gyr[m, 0]), rate * (1 - 2 * s), atol=1e-9)
+    np.testing.assert_allclose(tr.gyr[m, 1:], 0, atol=1e-12)
+    assert np.mean(np.abs(np.rad2deg(tr.gyr[m, 0]))) == pytest.approx(rate / 2, rel=0.01)
+    # the contact axis does not move: the heel and toe contact points keep their micro-motion only
+    np.testing.assert_allclose(np.linalg.norm(rec.events.stance_displacement[k]), 0.00534, rtol=0.1)
