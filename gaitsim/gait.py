@@ -79,12 +79,20 @@ class ImpactParams:
     heel_strike_duration_s : s, sharpness of the heel strike. Default 0.012.
     slap_rate_dps : deg/s, forefoot pitch rate when the forefoot meets the ground. Default 250.
     slap_duration_s : s, time in which the forefoot stops at foot flat (sharpness of the slap). Default 0.025.
+    ringing_hz : Hz, natural frequency of a damped vertical oscillation of the foot (shoe/mount ringing) excited
+        at each heel strike and forefoot slap. Default 0 (off).
+    ringing_damping : damping ratio of that oscillation, in (0, 1). Default 0.15.
+    ringing_accel_mps2 : m/s^2, its nominal peak acceleration (displacement amplitude times (2 pi f)^2).
+        Default 0.
     """
 
     heel_strike_velocity_mps: tuple[float, float, float] = (0.25, 0.0, -0.3)
     heel_strike_duration_s: float = 0.012
     slap_rate_dps: float = 250.0
     slap_duration_s: float = 0.025
+    ringing_hz: float = 0.0
+    ringing_damping: float = 0.15
+    ringing_accel_mps2: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -77,6 +77,9 @@ class FootTrajectory:
                 t0, t1 = plan.t_ic[k], plan.t_ic[k] + imp.heel_strike_duration_s
                 for a in range(3):
                     axes[a].append(smooth.hermite([t0, t1], [[0, v_hs[a], 0, 0, 0], [self.compression[a], 0, 0, 0, 0]]))
+            if k > 0 and imp.ringing_hz > 0 and imp.ringing_accel_mps2 != 0:
+                axes[2] += [smooth.Ringing(t_event, imp.ringing_hz, imp.ringing_damping, imp.ringing_accel_mps2)
+                            for t_event in (plan.t_ic[k], plan.t_ff[k])]
             if plan.walking[k] and mm.enabled:
                 for a in range(3):
                     axes[a] += [

@@ -135,6 +135,11 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
     _require(0 < imp.heel_strike_duration_s < rocker - imp.slap_duration_s, f"{where} [impact]",
              "heel_strike_duration_s", imp.heel_strike_duration_s, "must be > 0 and end before the forefoot slap")
     _require(imp.slap_rate_dps >= 0, f"{where} [impact]", "slap_rate_dps", imp.slap_rate_dps, "must be >= 0")
+    _require(imp.ringing_hz >= 0, f"{where} [impact]", "ringing_hz", imp.ringing_hz, "must be >= 0 (0 = off)")
+    _require(0 < imp.ringing_damping < 1, f"{where} [impact]", "ringing_damping", imp.ringing_damping, "must lie in (0, 1)")
+    if imp.ringing_hz > 0:
+        _require(imp.ringing_hz >= 5, f"{where} [impact]", "ringing_hz", imp.ringing_hz,
+                 "must be >= 5 Hz (the ringing must die out within the stance)")
     for k in ("creep_ramp_s", "settle_duration_s", "heel_off_duration_s"):
         _require(getattr(mm, k) > 0, f"{where} [micromotion]", k, getattr(mm, k), "must be > 0")
     push = g.push_off_frac * g.cycle_s

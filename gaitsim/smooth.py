@@ -134,3 +134,45 @@ def compose_trig(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         )
 
     return chain(c, -s, -c, s, c), chain(s, c, -s, -c, s)
+
+
+def product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Derivative stack of the product of two functions given by their stacks (Leibniz rule)."""
+    from math import comb
+
+    return np.stack([sum(comb(n, k) * a[k] * b[n - k] for k in range(n + 1)) for n in range(NDER)])
+
+
+class Ringing:
+    """A damped oscillation ``A exp(-zeta w (t-t0)) sin(w_d (t-t0))`` starting at ``t0``, windowed to stay C4.
+
+    The window rises with a C4 smoothstep over the first period and fades over the last period of a
+    duration after which the envelope is below 1 % (ln(100) / (zeta w)).
+
+    Parameters
+    ----------
+    t0 : s, onset.   freq_hz : Hz, natural frequency.   zeta : damping ratio (0, 1).
+    accel : m/s^2, nominal peak acceleration A w^2 (A is the displacement amplitude in m).
+    """
+
+    def __init__(self, t0: float, freq_hz: float, zeta: float, accel: float):
+        self.t0 = t0
+        w = 2 * np.pi * freq_hz
+        self.lam = complex(-zeta * w, w * np.sqrt(1 - zeta**2))
+        self.amp = accel / w**2
+        self.period = 1.0 / freq_hz
+        self.duration = max(np.log(100.0) / (zeta * w), 3 * self.period)
+
+    def stack(self, t: np.ndarray) -> np.ndarray:
+        t = np.asarray(t, float)
+        out = np.zeros((NDER, t.size))
+        m = (t >= self.t0) & (t <= self.t0 + self.duration)
+        if not m.any():
+            return out
+        s = t[m] - self.t0
+        e = np.exp(self.lam * s)
+        osc = np.stack([(self.lam**n * e).imag for n in range(NDER)]) * self.amp
+        fade = smoothstep_stack(t[m], self.t0 + self.duration - self.period, self.period, 1.0, 0.0)
+        rise = smoothstep_stack(t[m], self.t0, self.period, 0.0, 1.0)
+        out[:, m] = product(product(rise, fade), osc)
+        return out

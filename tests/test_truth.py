@@ -85,6 +85,7 @@ def test_mujoco_sensors_equal_rigid_body_formulas():
 
 def test_joint_trajectories_are_c4_at_every_knot():
     scen = short_walk(micromotion={"stance_roll_rate_dps": 20.0},
+                      impact={"ringing_hz": 60.0, "ringing_damping": 0.15, "ringing_accel_mps2": 15.0},
                       path={"kind": "arc", "radius_m": 5.0, "turn_deg": 80.0, "yaw_deg": 0.0})
     plan = plan_stances(scen.walk, run_generators(5)[0])
     traj = FootTrajectory(scen.walk, plan, 0.2)
@@ -94,6 +95,9 @@ def test_joint_trajectories_are_c4_at_every_knot():
         plan.t_ic + imp.heel_strike_duration_s, plan.t_ff - mm.creep_ramp_s, plan.t_ho + mm.creep_ramp_s,
         plan.t_ff + mm.settle_duration_s, plan.t_ho - mm.heel_off_duration_s / 2, plan.t_ho + mm.heel_off_duration_s / 2,
     ])
+    ring = smooth.Ringing(0.0, 60.0, 0.15, 15.0)
+    events = np.concatenate([plan.t_ic[1:], plan.t_ff[1:]])
+    knots = np.concatenate([knots, events + ring.period, events + ring.duration - ring.period, events + ring.duration])
     knots = knots[(knots > 1e-3) & (knots < plan.t_end - 1e-3)]
     eps = 1e-9
     jumps = np.abs(traj.joints(knots + eps) - traj.joints(knots - eps)).max(axis=2)  # (6, 5)
@@ -222,3 +226,17 @@ def test_stance_roll_over_rate_is_linear_through_foot_flat():
     assert np.mean(np.abs(np.rad2deg(tr.gyr[m, 0]))) == pytest.approx(rate / 2, rel=0.01)
     # the contact axis does not move: the heel and toe contact points keep their micro-motion only
     np.testing.assert_allclose(np.linalg.norm(rec.events.stance_displacement[k]), 0.00534, rtol=0.1)
+
+
+def test_impact_ringing_adds_a_damped_resonance_at_its_frequency():
+    f0, zeta, accel = 65.0, 0.1, 20.0
+    base = simulate_walk(short_walk(), seed=2).truth
+    ring = simulate_walk(short_walk(impact={"ringing_hz": f0, "ringing_damping": zeta, "ringing_accel_mps2": accel}),
+                         seed=2).truth
+    diff = ring.acc[:, 2] - base.acc[:, 2]
+    assert 0.5 * accel < np.abs(diff).max() < 1.5 * accel
+    spec = np.abs(np.fft.rfft(diff)) ** 2
+    f = np.fft.rfftfreq(diff.size, ring.t[1] - ring.t[0])
+    assert abs(f[np.argmax(spec)] - f0) < 2.0
+    # the oscillation is vertical displacement of the contact: sub-millimetre, and C4 (integrators unaffected)
+    assert np.abs(ring.pos - base.pos).max() < accel / (2 * np.pi * f0) ** 2 * 1.5
