@@ -1,0 +1,424 @@
+"""IMU forward model: true body-frame specific force and angular rate -> what the sensor outputs.
+
+Parameters live in an immutable :class:`SensorSpec` (SI inside; datasheet units only in
+:mod:`gaitsim.imu.config`). :func:`apply_sensor` applies, in this order (each term independent and off at its
+default value):
+
+1. **Mounting misalignment.** The sensor frame is the foot (body) frame rotated by
+   ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (``mounting_misalignment = (roll, pitch, yaw)``); the sensor sees
+   ``f_s = R^T f``, ``w_s = R^T w``.
+2. **Sampling instants.** Output sample k is taken at true time ``tau_k = t_0 + k dt / (1 + clock_error)``
+   (a clock running fast by ``clock_error`` samples more often), the gyro at ``tau_k + accel_gyro_skew``.
+   Truth is read there through a cubic spline (only when one of these terms is on; otherwise the samples
+   are the input samples exactly). The sensor samples over the input time span; samples whose (gyro)
+   instants fall outside it are dropped, so the output may be longer or shorter than the input. The reported timestamp is the sensor's own clock,
+   ``t_0 + k dt``, plus white timestamp jitter (std ``timestamp_jitter``).
+3. **Deterministic errors**, through :meth:`nav.calibration.Calibration.distort` (one implementation shared
+   with the compensation)::
+
+       f_m = M_a f + b_a            w_m = M_g w + G_g f + G2_g (f*f) + b_g
+
+   with ``b = bias + turn-on draw`` (the turn-on bias ~ N(0, bias_repeatability^2), drawn once per run).
+4. **Temperature**, with ``dT = T(t) - temperature_ref``: ``x_m <- b + (1 + temp_scale dT) (x_m - b)
+   + temp_bias dT`` per axis (scale on everything but the bias, then a bias slope).
+5. **Bias instability**: a first-order Gauss-Markov bias per axis, correlation time
+   ``bias_instability_tau``, stationary std ``0.664 B / 0.6174`` so that the peak of its Allan deviation
+   (reached at 1.89 tau_c) reads the datasheet value as ``0.664 B``, the IEEE flicker-floor convention;
+   it starts from its stationary distribution.
+   **Rate random walk**: a bias doing a random walk from zero, Allan deviation ``K sqrt(tau/3)``; it is
+   simulated on its own, whatever the bias instability. Both slow processes are simulated exactly at a
+   coarse step ``h`` (16 samples, or ``tau_c / 20`` if shorter) and linearly interpolated to the samples;
+   their spectra differ from the continuous processes only above ``1 / (2 h)``, where white noise
+   dominates by orders of magnitude.
+   **White noise**: sample std ``N sqrt(fs)`` (noise density N), from float32 standard normals.
+6. **Bandwidth**: a Butterworth low-pass of order ``filter_order`` and cutoff ``*_bandwidth`` (digital,
+   bilinear, at the output rate) acting on the sum above, started in steady state on the first sample so a
+   static start has no transient.
+7. **Quantisation** to multiples of ``*_resolution``, then **saturation** (clip) at ``+-*_range``.
+
+Random draws: the run's Generator spawns one child per stream in :data:`RANDOM_STREAMS` (always all of
+them, in that order); a term draws only from its own child, so switching a term on or off never changes
+the realisation of the others, and a seeded run is reproducible.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from numba import njit
+from scipy.signal import butter, lfilter, sosfilt, sosfilt_zi
+
+from gaitsim.errors import ScenarioError
+from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, gauss_markov_peak
+from gaitsim.imu.units import si_unit
+from nav import quaternion
+from nav.calibration import Calibration
+
+# parameter name -> (unit kind, shape, default). "axes" values are per-axis (3,) vectors, "matrix" (3, 3).
+PARAMETERS: dict[str, tuple[str, str, object]] = {
+    "accel_noise_density": ("accel_noise_density", "axes", 0.0),
+    "gyro_noise_density": ("gyro_noise_density", "axes", 0.0),
+    "accel_bias": ("acceleration", "axes", 0.0),
+    "gyro_bias": ("angular_rate", "axes", 0.0),
+    "accel_bias_repeatability": ("acceleration", "axes", 0.0),
+    "gyro_bias_repeatability": ("angular_rate", "axes", 0.0),
+    "accel_bias_instability": ("acceleration", "axes", 0.0),
+    "gyro_bias_instability": ("angular_rate", "axes", 0.0),
+    "accel_bias_instability_tau": ("time", "scalar", 100.0),
+    "gyro_bias_instability_tau": ("time", "scalar", 100.0),
+    "accel_random_walk": ("accel_random_walk", "axes", 0.0),
+    "gyro_random_walk": ("gyro_random_walk", "axes", 0.0),
+    "accel_misalignment": ("matrix", "matrix", np.eye(3)),
+    "gyro_misalignment": ("matrix", "matrix", np.eye(3)),
+    "gyro_g_sensitivity": ("g_sensitivity", "matrix", np.zeros((3, 3))),
+    "gyro_g2_sensitivity": ("g2_sensitivity", "matrix", np.zeros((3, 3))),
+    "accel_resolution": ("acceleration", "scalar", 0.0),
+    "gyro_resolution": ("angular_rate", "scalar", 0.0),
+    "accel_range": ("acceleration", "scalar", np.inf),
+    "gyro_range": ("angular_rate", "scalar", np.inf),
+    "accel_bandwidth": ("frequency", "scalar", np.inf),
+    "gyro_bandwidth": ("frequency", "scalar", np.inf),
+    "accel_temp_bias": ("accel_temperature_coefficient", "axes", 0.0),
+    "gyro_temp_bias": ("gyro_temperature_coefficient", "axes", 0.0),
+    "accel_temp_scale": ("scale_temperature_coefficient", "axes", 0.0),
+    "gyro_temp_scale": ("scale_temperature_coefficient", "axes", 0.0),
+    "temperature": ("temperature", "ramp", 25.0),
+    "temperature_ref": ("temperature", "scalar", 25.0),
+    "clock_error": ("ratio", "scalar", 0.0),
+    "timestamp_jitter": ("time", "scalar", 0.0),
+    "accel_gyro_skew": ("time", "scalar", 0.0),
+    "mounting_misalignment": ("angle", "axes", 0.0),
+}
+_SHAPES = {"axes": (3,), "matrix": (3, 3), "scalar": (), "ramp": (2,)}
+_NON_NEGATIVE = ("noise_density", "repeatability", "bias_instability", "random_walk", "resolution", "jitter")
+_POSITIVE = ("_tau", "_range", "_bandwidth")
+
+RANDOM_STREAMS = ("accel_turn_on", "gyro_turn_on", "accel_instability", "gyro_instability",
+                  "accel_random_walk", "gyro_random_walk", "accel_white", "gyro_white", "timestamp_jitter")
+SLOW_PROCESS_STEP = 16  # samples between nodes of the simulated bias-instability / random-walk processes
+
+
+def _as_parameter(name: str, value) -> np.ndarray:
+    """Read-only float array of the parameter's shape; a scalar broadcasts to 3 axes, to both ramp ends."""
+    _kind, shape_name, _default = PARAMETERS[name]
+    shape = _SHAPES[shape_name]
+    array = np.array(value, dtype=float)
+    if array.ndim == 0 and shape_name in ("axes", "ramp"):
+        array = np.full(shape, float(array))
+    if array.shape != shape:
+        raise ScenarioError(f"{name}: expected {'a number' if not shape else f'shape {shape}'} "
+                            f"(a number also works for per-axis values), got {np.asarray(value).tolist()!r}")
+    if np.any(np.isnan(array)) or (np.any(np.isinf(array)) and not name.endswith(("_range", "_bandwidth"))):
+        raise ScenarioError(f"{name}: value {array.tolist()} must be finite")
+    if name.endswith(_NON_NEGATIVE) and np.any(array < 0):
+        raise ScenarioError(f"{name}: value {array.tolist()} must be >= 0")
+    if name.endswith(_POSITIVE) and np.any(array <= 0):
+        raise ScenarioError(f"{name}: value {array.tolist()} must be > 0 (use inf to switch a range or "
+                            f"bandwidth off)")
+    if name.endswith("misalignment") and shape_name == "matrix" and abs(np.linalg.det(array)) < 1e-6:
+        raise ScenarioError(f"{name}: matrix {array.tolist()} is singular")
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """Immutable IMU error parameters, SI units (see :data:`PARAMETERS` for each name's unit kind).
+
+    Attributes
+    ----------
+    name : preset (or custom) name.
+    source : where the figures come from (datasheet, paper).
+    parameters : mapping parameter name -> read-only array (SI); names missing take their defaults.
+    filter_order : Butterworth order of the bandwidth low-pass (1..8).
+    withheld : True when the recording metadata must not declare the parameters (blind tests).
+    """
+
+    name: str = "custom"
+    source: str = ""
+    parameters: dict = field(default_factory=dict)
+    filter_order: int = 2
+    withheld: bool = False
+
+    def __post_init__(self):
+        unknown = set(self.parameters) - set(PARAMETERS)
+        if unknown:
+            raise ScenarioError(f"unknown sensor parameter(s) {sorted(unknown)}; choose from {list(PARAMETERS)}")
+        complete = {name: _as_parameter(name, self.parameters.get(name, default))
+                    for name, (_kind, _shape, default) in PARAMETERS.items()}
+        object.__setattr__(self, "parameters", _ReadOnlyDict(complete))
+        if not (isinstance(self.filter_order, int) and 1 <= self.filter_order <= 8):
+            raise ScenarioError(f"filter_order: value {self.filter_order!r} must be an integer in 1..8")
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.parameters[name]
+
+    def replace(self, **changes) -> "SensorSpec":
+        """A new spec with some parameters (SI) or the fields name/source/filter_order/withheld changed;
+        this spec is left as it is."""
+        top = {k: changes.pop(k) for k in ("name", "source", "filter_order", "withheld") if k in changes}
+        return dataclasses.replace(self, parameters={**self.parameters, **changes}, **top)
+
+    def deterministic(self, turn_on_accel=None, turn_on_gyro=None) -> Calibration:
+        """The deterministic error terms as a :class:`nav.calibration.Calibration` (what a perfect lab would
+        measure), optionally with turn-on bias draws (3,) (m/s^2, rad/s) added to the constant biases."""
+        g2 = self["gyro_g2_sensitivity"]
+        return Calibration(
+            b_a=self["accel_bias"] + (0.0 if turn_on_accel is None else turn_on_accel),
+            M_a=self["accel_misalignment"],
+            b_g=self["gyro_bias"] + (0.0 if turn_on_gyro is None else turn_on_gyro), M_g=self["gyro_misalignment"], G_g=self["gyro_g_sensitivity"],
+            G2_g=g2 if np.any(g2) else None, source=f"sensor spec {self.name!r} (true values)",
+        )
+
+    def declared(self) -> dict:
+        """JSON-ready description for meta.json: every parameter in SI with its unit name, or only
+        ``{"withheld": true}`` when the scenario asked to withhold them."""
+        if self.withheld:
+            return {"withheld": True}
+        parameters = {}
+        for name, (kind, _shape, _default) in PARAMETERS.items():
+            value = self[name]
+            listed = np.where(np.isinf(value), np.nan, value).tolist()
+            parameters[name] = {"value": _inf_to_text(listed, value), "unit": si_unit(kind)}
+        return {"withheld": False, "name": self.name, "source": self.source, "filter_order": self.filter_order,
+                "parameters": parameters}
+
+
+def _inf_to_text(listed, value: np.ndarray):
+    """JSON has no infinity: write ``"inf"`` for an infinite scalar (a switched-off range or bandwidth)."""
+    return "inf" if value.ndim == 0 and np.isinf(value) else listed
+
+
+class _ReadOnlyDict(dict):
+    """A dict that refuses item assignment (keeps a SensorSpec immutable)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("SensorSpec parameters are immutable; use SensorSpec.replace(...)")
+
+    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = _refuse
+
+
+@lru_cache(maxsize=1)
+def _gauss_markov_std_per_instability() -> float:
+    """Stationary GM std per unit of datasheet bias instability B: 0.664 / 0.6174."""
+    return BIAS_INSTABILITY_FLOOR / gauss_markov_peak()[1]
+
+
+# ---------------------------------------------------------------------------------------------- pieces
+
+
+@njit(cache=True)
+def _add_interpolated(out: np.ndarray, nodes: np.ndarray, node_step: int) -> None:
+    """out[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at sample k."""
+    for k in range(out.shape[0]):
+        j = k // node_step
+        frac = (k - j * node_step) / node_step
+        for c in range(3):
+            out[k, c] += nodes[j, c] + frac * (nodes[j + 1, c] - nodes[j, c])
+
+
+@njit(cache=True)
+def _add_scaled(out: np.ndarray, draws: np.ndarray, scale: np.ndarray) -> None:
+    """out[k, c] += draws[k, c] * scale[c] (no temporary array)."""
+    for k in range(out.shape[0]):
+        for c in range(3):
+            out[k, c] += draws[k, c] * scale[c]
+
+
+WHITE_NOISE_CHUNK = 32768  # samples per block of white-noise draws (a cache-sized, reused buffer)
+
+
+def add_white_noise(out: np.ndarray, sample_std: np.ndarray, rng: np.random.Generator) -> None:
+    """Add white noise of per-axis sample std ``sample_std`` (3,) to ``out`` (n, 3) in place.
+
+    Draws are float32 standard normals (24-bit resolution, ample for noise), taken in blocks into one
+    reused buffer; the sequence is the same as one ``rng.standard_normal((n, 3), dtype=float32)`` call.
+    """
+    buffer = np.empty((min(WHITE_NOISE_CHUNK, out.shape[0]), 3), dtype=np.float32)
+    for start in range(0, out.shape[0], WHITE_NOISE_CHUNK):
+        block = buffer[: min(WHITE_NOISE_CHUNK, out.shape[0] - start)]
+        rng.standard_normal(out=block, dtype=np.float32)
+        _add_scaled(out[start:start + block.shape[0]], block, sample_std)
+
+
+def _node_count(n: int, node_step: int) -> int:
+    """Nodes needed so that nodes[(n-1)//node_step + 1] exists."""
+    return (n - 1) // node_step + 2
+
+
+def add_gauss_markov_bias(out: np.ndarray, dt: float, instability: np.ndarray, tau_c: float,
+                          rng: np.random.Generator) -> None:
+    """Add a bias-instability process to ``out`` (n, 3) in place: first-order Gauss-Markov, stationary from
+    the start, simulated exactly on nodes and linearly interpolated (module docstring, step 5).
+
+    Parameters
+    ----------
+    out : (n, 3) signal, unit of ``instability``.
+    dt : sample interval, s.
+    instability : (3,) datasheet bias instability B.
+    tau_c : correlation time, s.
+    rng : the term's own Generator.
+    """
+    node_step = int(max(1, min(SLOW_PROCESS_STEP, np.floor(tau_c / (20.0 * dt)))))
+    sigma = _gauss_markov_std_per_instability() * np.asarray(instability)
+    decay = np.exp(-node_step * dt / tau_c)
+    draws = rng.standard_normal((_node_count(out.shape[0], node_step), 3))
+    first = draws[0] * sigma
+    steps = draws[1:] * (sigma * np.sqrt(1.0 - decay**2))
+    nodes = np.concatenate([first[None, :], lfilter([1.0], [1.0, -decay], steps, axis=0, zi=(decay * first)[None, :])[0]])
+    _add_interpolated(out, nodes, node_step)
+
+
+def add_random_walk_bias(out: np.ndarray, dt: float, walk: np.ndarray, rng: np.random.Generator) -> None:
+    """Add a rate-random-walk bias starting at zero to ``out`` (n, 3) in place; ``walk`` (3,) is K in
+    (signal unit)/sqrt(s); simulated exactly on nodes and linearly interpolated."""
+    node_step = SLOW_PROCESS_STEP
+    steps = rng.standard_normal((_node_count(out.shape[0], node_step) - 1, 3)) * (np.asarray(walk) * np.sqrt(node_step * dt))
+    nodes = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+    _add_interpolated(out, nodes, node_step)
+
+
+def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
+    """Butterworth low-pass along axis 0, started in steady state on the first sample (no start transient).
+
+    Raises ScenarioError when the cutoff is not below the Nyquist frequency.
+    """
+    if cutoff_hz >= 0.5 * rate_hz:
+        raise ScenarioError(f"bandwidth {cutoff_hz} Hz must be below half the sample rate ({0.5 * rate_hz} Hz)")
+    sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    zi = sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
+    return sosfilt(sos, x, axis=0, zi=zi)[0]
+
+
+def quantise_and_clip(x: np.ndarray, resolution: float, limit: float) -> np.ndarray:
+    """Round to multiples of ``resolution`` (0: off), then clip at ``+-limit`` (inf: off); in place."""
+    if resolution > 0:
+        np.divide(x, resolution, out=x)
+        np.round(x, out=x)
+        np.multiply(x, resolution, out=x)
+    if np.isfinite(limit):
+        np.clip(x, -limit, limit, out=x)
+    return x
+
+
+def mounting_rotation(roll_pitch_yaw: np.ndarray) -> np.ndarray:
+    """R (3, 3) mapping sensor-frame vectors into the foot frame, R = Rz(yaw) Ry(pitch) Rx(roll), angles rad."""
+    roll, pitch, yaw = roll_pitch_yaw
+    return quaternion.to_matrix(quaternion.from_euler_zyx(yaw, pitch, roll))
+
+
+def _is_identity(cal: Calibration) -> bool:
+    """True when the deterministic terms change nothing (skipped for speed; the result is identical)."""
+    return (not np.any(cal.b_a) and not np.any(cal.b_g) and not np.any(cal.G_g) and cal.G2_g is None
+            and np.array_equal(cal.M_a, np.eye(3)) and np.array_equal(cal.M_g, np.eye(3)))
+
+
+def _temperature_at(spec: SensorSpec, temperature, t: np.ndarray, instants: np.ndarray) -> np.ndarray:
+    """Temperature (degC) at the sample instants: the spec's ramp, a constant, or a profile given at ``t``."""
+    if temperature is None:
+        start, end = spec["temperature"]
+        span = t[-1] - t[0]
+        return start + (end - start) * (instants - t[0]) / (span if span > 0 else 1.0)
+    temperature = np.asarray(temperature, float)
+    if temperature.ndim == 0:
+        return np.full(instants.shape, float(temperature))
+    if temperature.shape != t.shape:
+        raise ValueError(f"temperature profile: expected shape {t.shape} (one value per input sample), "
+                         f"got {temperature.shape}")
+    return np.interp(instants, t, temperature)
+
+
+# ---------------------------------------------------------------------------------------------- model
+
+
+def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, rng: np.random.Generator,
+                 temperature=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Turn true specific force and angular rate into sensor output (see the module docstring for the order).
+
+    Parameters
+    ----------
+    spec : sensor parameters.
+    t : (N,) sample times of the truth, s, uniform grid.
+    acc : (N, 3) true specific force, m/s^2, body (foot) frame.
+    gyr : (N, 3) true angular rate, rad/s, body (foot) frame.
+    rng : the run's Generator; children are spawned from it (see :data:`RANDOM_STREAMS`).
+    temperature : None (use the spec's ramp), a constant (degC) or an (N,) profile at ``t`` (degC).
+
+    Returns
+    -------
+    t_meas : (M,) reported timestamps, s (M == N unless clock error or skew are on).
+    acc_meas : (M, 3) measured specific force, m/s^2, sensor frame.
+    gyr_meas : (M, 3) measured angular rate, rad/s, sensor frame.
+    """
+    t = np.asarray(t, float)
+    acc = np.asarray(acc, float)
+    gyr = np.asarray(gyr, float)
+    if acc.shape != (t.size, 3) or gyr.shape != (t.size, 3):
+        raise ValueError(f"acc and gyr must be ({t.size}, 3) like t, got {acc.shape} and {gyr.shape}")
+    if t.size < 2:
+        raise ValueError("need at least 2 samples")
+    streams = dict(zip(RANDOM_STREAMS, rng.spawn(len(RANDOM_STREAMS))))
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    rate_hz = 1.0 / dt
+    p = spec.parameters
+
+    # 1. mounting
+    if np.any(p["mounting_misalignment"]):
+        to_sensor = mounting_rotation(p["mounting_misalignment"]).T
+        acc = acc @ to_sensor.T
+        gyr = gyr @ to_sensor.T
+
+    # 2. sampling instants
+    clock, skew = float(p["clock_error"]), float(p["accel_gyro_skew"])
+    if clock or skew:
+        k = np.arange(int(np.floor((t.size - 1) * (1.0 + clock))) + 1)
+        instants = t[0] + k * dt / (1.0 + clock)
+        keep = (instants >= t[0]) & (instants <= t[-1]) & (instants + skew >= t[0]) & (instants + skew <= t[-1])
+        k, instants = k[keep], instants[keep]
+        acc = CubicSpline(t, acc, axis=0)(instants) if clock else acc[keep]
+        gyr = CubicSpline(t, gyr, axis=0)(instants + skew)
+        t_meas = t[0] + k * dt
+    else:
+        instants = t
+        t_meas = t.copy()
+    n = t_meas.size
+    if p["timestamp_jitter"] > 0:
+        t_meas = t_meas + streams["timestamp_jitter"].standard_normal(n) * p["timestamp_jitter"]
+
+    # 3. deterministic errors (with this run's turn-on bias)
+    turn_on = {s: streams[f"{s}_turn_on"].standard_normal(3) * p[f"{s}_bias_repeatability"]
+               if np.any(p[f"{s}_bias_repeatability"]) else np.zeros(3) for s in ("accel", "gyro")}
+    deterministic = spec.deterministic(turn_on["accel"], turn_on["gyro"])
+    if _is_identity(deterministic):
+        acc_m, gyr_m = acc.copy(), gyr.copy()
+    else:
+        acc_m, gyr_m = deterministic.distort(acc, gyr)
+
+    # 4. temperature
+    scale_on = np.any(p["accel_temp_scale"]) or np.any(p["gyro_temp_scale"])
+    bias_on = np.any(p["accel_temp_bias"]) or np.any(p["gyro_temp_bias"])
+    if scale_on or bias_on:
+        delta = (_temperature_at(spec, temperature, t, instants) - p["temperature_ref"])[:, None]
+        for out, bias, s in ((acc_m, deterministic.b_a, "accel"), (gyr_m, deterministic.b_g, "gyro")):
+            out += (out - bias) * (p[f"{s}_temp_scale"] * delta) + p[f"{s}_temp_bias"] * delta
+
+    # 5.-7. stochastic terms, bandwidth, quantisation and saturation
+    for out, s in ((acc_m, "accel"), (gyr_m, "gyro")):
+        if np.any(p[f"{s}_bias_instability"]):
+            add_gauss_markov_bias(out, dt, p[f"{s}_bias_instability"], float(p[f"{s}_bias_instability_tau"]),
+                                  streams[f"{s}_instability"])
+        if np.any(p[f"{s}_random_walk"]):
+            add_random_walk_bias(out, dt, p[f"{s}_random_walk"], streams[f"{s}_random_walk"])
+        if np.any(p[f"{s}_noise_density"]):
+            add_white_noise(out, np.asarray(p[f"{s}_noise_density"] * np.sqrt(rate_hz)), streams[f"{s}_white"])
+    if np.isfinite(p["accel_bandwidth"]):
+        acc_m = low_pass(acc_m, float(p["accel_bandwidth"]), rate_hz, spec.filter_order)
+    if np.isfinite(p["gyro_bandwidth"]):
+        gyr_m = low_pass(gyr_m, float(p["gyro_bandwidth"]), rate_hz, spec.filter_order)
+    quantise_and_clip(acc_m, float(p["accel_resolution"]), float(p["accel_range"]))
+    quantise_and_clip(gyr_m, float(p["gyro_resolution"]), float(p["gyro_range"]))
+    return t_meas, acc_m, gyr_m

@@ -1,0 +1,205 @@
+"""Laws of the IMU forward model (gaitsim.imu.model): each term alone, exactly or with a stated tolerance."""
+
+import numpy as np
+import pytest
+from scipy.signal import butter, sosfreqz
+
+from gaitsim.imu.model import SensorSpec, apply_sensor, mounting_rotation
+from gaitsim.imu.presets import get_preset
+
+RATE = 800.0
+
+
+def walking_like_truth(n=4000, seed=0):
+    """Smooth, rich truth: sums of sinusoids on top of gravity (m/s^2) and rates (rad/s)."""
+    t = np.arange(n) / RATE
+    rng = np.random.default_rng(seed)
+    freqs = rng.uniform(0.5, 20.0, (6, 4))
+    amps = rng.uniform(0.5, 5.0, (6, 4))
+    signal = np.stack([(amps[c] * np.sin(2 * np.pi * freqs[c] * t[:, None])).sum(1) for c in range(6)], 1)
+    acc = signal[:, :3] * 3.0 + np.array([0.0, 0.0, 9.81])
+    gyr = signal[:, 3:]
+    return t, acc, gyr
+
+
+def only(**parameters) -> SensorSpec:
+    return SensorSpec(name="test", parameters=parameters)
+
+
+def run(spec, t, acc, gyr, seed=1, **kw):
+    return apply_sensor(spec, t, acc, gyr, np.random.default_rng(seed), **kw)
+
+
+def test_ideal_preset_is_the_identity_exactly():
+    t, acc, gyr = walking_like_truth()
+    t_m, acc_m, gyr_m = run(get_preset("ideal"), t, acc, gyr)
+    assert np.array_equal(t_m, t) and np.array_equal(acc_m, acc) and np.array_equal(gyr_m, gyr)
+
+
+def test_inputs_are_never_modified():
+    t, acc, gyr = walking_like_truth()
+    before = acc.copy(), gyr.copy()
+    run(get_preset("paper-vn200"), t, acc, gyr)
+    assert np.array_equal(acc, before[0]) and np.array_equal(gyr, before[1])
+
+
+def test_only_g_sensitivity_adds_G_f():
+    t, acc, gyr = walking_like_truth()
+    G = np.deg2rad(np.array(get_preset("paper-vn200")["gyro_g_sensitivity"]))
+    _, acc_m, gyr_m = run(only(gyro_g_sensitivity=G), t, acc, gyr)
+    assert np.array_equal(acc_m, acc)
+    np.testing.assert_allclose(gyr_m - gyr, acc @ G.T, rtol=0, atol=1e-15)
+
+
+def test_only_accel_matrix_gives_M_f():
+    t, acc, gyr = walking_like_truth()
+    M = np.array(get_preset("paper-vn200")["accel_misalignment"])
+    _, acc_m, gyr_m = run(only(accel_misalignment=M), t, acc, gyr)
+    np.testing.assert_allclose(acc_m, acc @ M.T, rtol=0, atol=1e-13)
+    assert np.array_equal(gyr_m, gyr)
+
+
+def test_deterministic_model_inverts_exactly():
+    t, acc, gyr = walking_like_truth()
+    g2 = np.full((3, 3), 1e-6) + np.diag([3e-6, -2e-6, 1e-6])
+    spec = get_preset("paper-vn200").replace(
+        gyro_noise_density=0.0, accel_noise_density=0.0, gyro_bias_instability=0.0, accel_bias_instability=0.0,
+        gyro_g2_sensitivity=g2)
+    _, acc_m, gyr_m = run(spec, t, acc, gyr)
+    acc_c, gyr_c = spec.deterministic().correct(acc_m, gyr_m)
+    np.testing.assert_allclose(acc_c, acc, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(gyr_c, gyr, rtol=0, atol=1e-12)
+
+
+def test_quantisation_step_equals_resolution():
+    t = np.arange(4000) / RATE
+    ramp = np.linspace(-3.0, 3.0, t.size)
+    acc = np.column_stack([ramp, ramp * 0.5, ramp + 9.81])
+    resolution = 0.0125
+    _, acc_m, _ = run(only(accel_resolution=resolution), t, acc, np.zeros_like(acc))
+    steps = np.diff(acc_m[:, 0])
+    np.testing.assert_allclose(np.unique(np.round(steps[steps != 0], 12)), [resolution], rtol=1e-9)
+    np.testing.assert_allclose(acc_m / resolution, np.round(acc_m / resolution), atol=1e-9)
+    assert np.max(np.abs(acc_m - acc)) <= resolution / 2 + 1e-12
+
+
+def test_saturation_clips_exactly_at_range():
+    t = np.arange(2000) / RATE
+    ramp = np.linspace(-40.0, 40.0, t.size)
+    gyr = np.column_stack([ramp, -ramp, ramp * 0.1])
+    limit = np.deg2rad(2000.0)
+    _, _, gyr_m = run(only(gyro_range=limit), t, np.zeros_like(gyr), gyr)
+    assert gyr_m.max() == limit and gyr_m.min() == -limit
+    inside = np.abs(gyr) < limit
+    assert np.array_equal(gyr_m[inside], gyr[inside])
+
+
+def test_bandwidth_starts_in_steady_state_and_has_the_butterworth_gain():
+    t = np.arange(8000) / RATE
+    still = np.tile([0.1, -0.2, 9.81], (t.size, 1))
+    _, acc_m, _ = run(only(accel_bandwidth=100.0), t, still, np.zeros_like(still))
+    np.testing.assert_allclose(acc_m, still, rtol=0, atol=1e-12)
+    f = 60.0
+    sine = np.column_stack([np.sin(2 * np.pi * f * t)] * 3)
+    _, _, gyr_m = run(only(gyro_bandwidth=100.0), t, np.zeros_like(sine), sine)
+    late = slice(4000, None)
+    gain = np.sqrt(2 * np.mean(gyr_m[late, 0] ** 2))
+    _, h = sosfreqz(butter(2, 100.0, fs=RATE, output="sos"), worN=[f], fs=RATE)
+    assert gain == pytest.approx(abs(h[0]), rel=2e-3)
+
+
+def test_temperature_bias_and_scale_follow_the_ramp():
+    t = np.arange(4000) / RATE
+    acc = np.tile([1.0, -2.0, 9.81], (t.size, 1))
+    slope, scale = np.array([1e-3, 2e-3, -1e-3]), np.array([1e-4, 0.0, -2e-4])
+    spec = only(accel_temp_bias=slope, accel_temp_scale=scale, temperature=[20.0, 40.0], temperature_ref=25.0)
+    _, acc_m, _ = run(spec, t, acc, np.zeros_like(acc))
+    delta = (20.0 + 20.0 * (t - t[0]) / (t[-1] - t[0]) - 25.0)[:, None]
+    np.testing.assert_allclose(acc_m, acc * (1 + scale * delta) + slope * delta, rtol=0, atol=1e-12)
+
+
+def test_clock_error_and_skew_sample_truth_at_the_right_instants():
+    t = np.arange(8000) / RATE
+    w = 2 * np.pi * 3.0
+    acc = np.column_stack([np.sin(w * t)] * 3)
+    clock, skew = 200e-6, 1.5e-3
+    t_m, acc_m, gyr_m = run(only(clock_error=clock, accel_gyro_skew=skew), t, acc, acc.copy())
+    k = np.round((t_m - t[0]) * RATE).astype(int)
+    np.testing.assert_allclose(t_m, t[0] + k / RATE, atol=1e-12)
+    instants = t[0] + k / RATE / (1 + clock)
+    np.testing.assert_allclose(acc_m[:, 0], np.sin(w * instants), atol=1e-7)
+    np.testing.assert_allclose(gyr_m[:, 0], np.sin(w * (instants + skew)), atol=1e-7)
+    # a fast clock takes more samples over the span; those whose gyro instant passes the end are dropped
+    assert instants[-1] + skew <= t[-1] < instants[-1] + skew + 1 / RATE / (1 + clock)
+    t_fast, _, _ = run(only(clock_error=clock), t, acc, acc.copy())
+    assert t_fast.size == int((t.size - 1) * (1 + clock)) + 1 > t.size
+
+
+def test_timestamp_jitter_has_the_configured_std():
+    t = np.arange(20000) / RATE
+    t_m, _, _ = run(only(timestamp_jitter=50e-6), t, np.zeros((t.size, 3)), np.zeros((t.size, 3)))
+    assert np.std(t_m - t) == pytest.approx(50e-6, rel=0.03)
+
+
+def test_mounting_misalignment_rotates_into_the_sensor_frame():
+    t, acc, gyr = walking_like_truth(n=100)
+    rpy = np.deg2rad([2.0, -3.0, 90.0])
+    _, acc_m, gyr_m = run(only(mounting_misalignment=rpy), t, acc, gyr)
+    rotation = mounting_rotation(rpy)
+    np.testing.assert_allclose(acc_m, acc @ rotation, atol=1e-12)  # R^T f for each row
+    np.testing.assert_allclose(gyr_m @ rotation.T, gyr, atol=1e-12)
+    yaw_only = mounting_rotation(np.deg2rad([0.0, 0.0, 90.0]))
+    np.testing.assert_allclose(yaw_only.T @ [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], atol=1e-15)
+
+
+def test_turn_on_bias_is_constant_in_a_run_and_spreads_across_runs():
+    t = np.arange(200) / RATE
+    zeros = np.zeros((t.size, 3))
+    sigma = 0.01
+    offsets = []
+    for seed in range(300):
+        _, acc_m, _ = run(only(accel_bias_repeatability=sigma), t, zeros, zeros, seed=seed)
+        assert np.ptp(acc_m, axis=0).max() == 0.0
+        offsets.append(acc_m[0])
+    assert np.std(offsets) == pytest.approx(sigma, rel=0.1)
+
+
+def test_gauss_markov_stationary_std():
+    t = np.arange(200_000) / 100.0
+    zeros = np.zeros((t.size, 3))
+    instability = 1e-3
+    spec = only(gyro_bias_instability=instability, gyro_bias_instability_tau=2.0)
+    _, _, gyr_m = run(spec, t, zeros, zeros)
+    assert np.std(gyr_m) == pytest.approx(0.664 / 0.6174 * instability, rel=0.05)
+
+
+def test_each_term_draws_from_its_own_stream():
+    t, acc, gyr = walking_like_truth()
+    accel_only = only(accel_noise_density=1e-3)
+    more = only(accel_noise_density=1e-3, gyro_noise_density=1e-4, gyro_random_walk=1e-4,
+                accel_bias_repeatability=0.0, gyro_bias_instability=1e-4, timestamp_jitter=1e-6)
+    _, acc_a, _ = run(accel_only, t, acc, gyr, seed=5)
+    _, acc_b, gyr_b = run(more, t, acc, gyr, seed=5)
+    assert np.array_equal(acc_a, acc_b)
+    _, _, gyr_c = run(more.replace(gyro_random_walk=0.0, gyro_bias_instability=0.0), t, acc, gyr, seed=5)
+    _, _, gyr_white = run(only(gyro_noise_density=1e-4), t, acc, gyr, seed=5)
+    np.testing.assert_allclose(gyr_c, gyr_white, rtol=0, atol=0)
+    assert not np.array_equal(gyr_b, gyr_c)
+
+
+def test_seeded_runs_are_reproducible_and_seeds_differ():
+    t, acc, gyr = walking_like_truth()
+    spec = get_preset("bmi160")
+    first = run(spec, t, acc, gyr, seed=11)
+    again = run(spec, t, acc, gyr, seed=11)
+    other = run(spec, t, acc, gyr, seed=12)
+    assert all(np.array_equal(a, b) for a, b in zip(first, again))
+    assert not np.array_equal(first[1], other[1])
+
+
+def test_bad_inputs_are_refused():
+    t, acc, gyr = walking_like_truth(n=50)
+    with pytest.raises(ValueError, match=r"acc and gyr must be \(50, 3\)"):
+        run(get_preset("vn200"), t, acc[:, :2], gyr)
+    with pytest.raises(ValueError, match="temperature profile"):
+        run(only(accel_temp_bias=1e-3), t, acc, gyr, temperature=np.zeros(7))
