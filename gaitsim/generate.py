@@ -46,6 +46,12 @@ def summary(rec: Recording) -> str:
         f"  peak specific force {fmag.max() / 9.81:.1f} g, peak angular rate {wmag.max():.0f} deg/s",
         f"  labelled stance {tr.stance.mean() * 100:.1f} % of samples, mean stance speed "
         f"{in_stance.mean() * 1000:.2f} mm/s, true stance displacement {np.linalg.norm(ev.stance_displacement, axis=1).sum():.3f} m",
-        f"  sensor: {rec.meta.get('sensor', {}).get('preset', 'declared' if rec.meta.get('sensor') else 'ideal')}",
+        f"  sensor: {_sensor_name(rec.meta.get('sensor', {}))}",
     ]
     return "\n".join(lines)
+
+
+def _sensor_name(declared: dict) -> str:
+    if declared.get("withheld"):
+        return "parameters withheld from the metadata"
+    return declared.get("name", "ideal")

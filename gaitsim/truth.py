@@ -117,7 +117,7 @@ def simulate_walk(scenario: Scenario, seed: int | None = None, run: int = 0) -> 
     meta = describe(scenario, seed, run)
     if scenario.sensor is None:
         t, acc, gyr = truth.t.copy(), truth.acc.copy(), truth.gyr.copy()
-        meta["sensor"] = {"preset": "ideal", "note": "imu.csv holds the exact truth (no sensor model)"}
+        meta["sensor"] = {"name": "ideal", "withheld": False, "note": "imu.csv holds the exact truth (no sensor model)"}
     else:
         from .imu.model import apply_sensor
 
