@@ -1,0 +1,257 @@
+"""Closed-loop error-state EKF for ZUPT-aided foot-mounted inertial navigation (flat earth, ENU).
+
+States (true minus estimated, reset to zero after each correction): position (m), velocity (m/s) and attitude
+(rad, world-frame small angle) -- 9 states; + accelerometer bias (m/s^2) and gyro bias (rad/s) -- 15; + the 9
+coefficients of the gyro g-sensitivity matrix G (rad/s per m/s^2, row-major; ``w_meas = w + b_g + G f``, after
+Bancroft & Lachapelle) -- 24.
+
+- Propagation: the nominal state by the strapdown of nav.strapdown (RK4 on point samples, or exact increments);
+  the covariance by Phi = I + F dt and Q = diag(noise density^2) * dt (continuous white noise integrated over
+  the sample interval, so results do not depend on the sample rate through the noise model).
+- Updates: Joseph form ``(I-KH) P (I-KH)^T + K R K^T``, symmetrised; each correction is injected into the
+  nominal state at once (closed loop).
+- ZUPT: the pseudo-measurement "velocity = v_pseudo" with v_pseudo given per sample in the foot's heading frame
+  (x along the foot's horizontal heading, z up; rotated by the current yaw estimate). Zero by default.
+- Optional: zero angular-rate update (needs the gyro bias states), level-walking height constraint at ZUPTs
+  (off unless asked), RTS smoother over the whole recording (state only; memory N * n^2 * 8 bytes).
+
+Defaults follow OpenShoe's filter (anchors §3) converted to ENU and to noise densities: OpenShoe adds a
+per-sample standard deviation sigma every sample at 820 Hz, which is the density sigma/sqrt(820 Hz).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from . import _kernels
+from .strapdown import DEFAULT_GRAVITY, mechanisation_inputs, mid_samples
+
+STATE_SIZES = (9, 15, 24)
+OPENSHOE_RATE_HZ = 820.0  # the sample rate at which OpenShoe's per-sample noise values are converted
+
+
+@dataclass(frozen=True)
+class FilterConfig:
+    """Filter settings; every field in SI units.
+
+    Attributes
+    ----------
+    states : 9, 15 or 24 (see the module docstring). Default 9 (OpenShoe's default).
+    gravity : m/s^2, magnitude of gravity (0, 0, -gravity). Default 9.81.
+    acc_noise_density : m/s^2/sqrt(Hz) (= m/s/sqrt(s)), process noise on velocity. Default OpenShoe's
+        0.5 m/s^2 per sample at 820 Hz = 0.01746.
+    gyr_noise_density : rad/s/sqrt(Hz) (= rad/sqrt(s)), process noise on attitude. Default OpenShoe's 0.5 deg/s
+        per sample at 820 Hz = 3.047e-4.
+    acc_bias_random_walk : m/s^2/sqrt(s), bias driving noise. Default 1e-7 m/s^2 per sample at 820 Hz
+        = 2.864e-6.
+    gyr_bias_random_walk : rad/s/sqrt(s), bias driving noise. Default 1e-7 rad/s per sample at 820 Hz
+        = 2.864e-6.
+    gsens_random_walk : (rad/s)/(m/s^2)/sqrt(s), g-sensitivity driving noise. Default 0 (constant).
+    zupt_sigma : m/s, ZUPT pseudo-measurement noise std per axis. Default 0.01 (OpenShoe).
+    zaru : bool, apply a zero angular-rate update at stationary samples (needs states >= 15). Default False.
+    zaru_sigma : rad/s, its noise std per axis. Default 0.1 deg/s.
+    level_sigma : m, std of the optional "height = initial height" constraint at ZUPTs; 0 disables it (default).
+    p0_pos : m, p0_vel : m/s, p0_tilt : rad (roll, pitch), p0_yaw : rad -- initial standard deviations.
+        Defaults 1e-5 m, 1e-5 m/s, 0.1 deg, 0.1 deg (OpenShoe).
+    p0_acc_bias : m/s^2, p0_gyr_bias : rad/s -- initial bias std. Defaults 0.3 m/s^2, 0.3 deg/s (OpenShoe).
+    p0_gsens : (rad/s)/(m/s^2), initial g-sensitivity std. Default 0.005 deg/s per m/s^2 (the seed paper's
+        coefficients are ~0.002 deg/s per m/s^2).
+    """
+
+    states: int = 9
+    gravity: float = DEFAULT_GRAVITY
+    acc_noise_density: float = 0.5 / math.sqrt(OPENSHOE_RATE_HZ)
+    gyr_noise_density: float = math.radians(0.5) / math.sqrt(OPENSHOE_RATE_HZ)
+    acc_bias_random_walk: float = 1e-7 * math.sqrt(OPENSHOE_RATE_HZ)
+    gyr_bias_random_walk: float = 1e-7 * math.sqrt(OPENSHOE_RATE_HZ)
+    gsens_random_walk: float = 0.0
+    zupt_sigma: float = 0.01
+    zaru: bool = False
+    zaru_sigma: float = math.radians(0.1)
+    level_sigma: float = 0.0
+    p0_pos: float = 1e-5
+    p0_vel: float = 1e-5
+    p0_tilt: float = math.radians(0.1)
+    p0_yaw: float = math.radians(0.1)
+    p0_acc_bias: float = 0.3
+    p0_gyr_bias: float = math.radians(0.3)
+    p0_gsens: float = math.radians(0.005)
+
+    def __post_init__(self):
+        if self.states not in STATE_SIZES:
+            raise ValueError(f"FilterConfig.states = {self.states}; allowed: {STATE_SIZES}")
+        if self.zaru and self.states < 15:
+            raise ValueError("FilterConfig.zaru = True needs the gyro bias states (states = 15 or 24); "
+                             f"got states = {self.states}")
+        for name in ("gravity", "zupt_sigma", "zaru_sigma", "p0_pos", "p0_vel", "p0_tilt", "p0_yaw",
+                     "p0_acc_bias", "p0_gyr_bias", "p0_gsens"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"FilterConfig.{name} = {getattr(self, name)} must be > 0")
+        for name in ("acc_noise_density", "gyr_noise_density", "acc_bias_random_walk", "gyr_bias_random_walk",
+                     "gsens_random_walk", "level_sigma"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"FilterConfig.{name} = {getattr(self, name)} must be >= 0")
+
+    def as_array(self) -> np.ndarray:
+        """The float64 vector the compiled filter reads (indices nav._kernels.CFG_*)."""
+        cfg = np.empty(_kernels.CFG_SIZE)
+        cfg[_kernels.CFG_GRAVITY] = self.gravity
+        cfg[_kernels.CFG_ACC_NOISE] = self.acc_noise_density
+        cfg[_kernels.CFG_GYR_NOISE] = self.gyr_noise_density
+        cfg[_kernels.CFG_ACC_BIAS_RW] = self.acc_bias_random_walk
+        cfg[_kernels.CFG_GYR_BIAS_RW] = self.gyr_bias_random_walk
+        cfg[_kernels.CFG_GSENS_RW] = self.gsens_random_walk
+        cfg[_kernels.CFG_ZUPT_SIGMA] = self.zupt_sigma
+        cfg[_kernels.CFG_ZARU_SIGMA] = self.zaru_sigma
+        cfg[_kernels.CFG_LEVEL_SIGMA] = self.level_sigma
+        cfg[_kernels.CFG_P0_POS] = self.p0_pos
+        cfg[_kernels.CFG_P0_VEL] = self.p0_vel
+        cfg[_kernels.CFG_P0_TILT] = self.p0_tilt
+        cfg[_kernels.CFG_P0_YAW] = self.p0_yaw
+        cfg[_kernels.CFG_P0_ACC_BIAS] = self.p0_acc_bias
+        cfg[_kernels.CFG_P0_GYR_BIAS] = self.p0_gyr_bias
+        cfg[_kernels.CFG_P0_GSENS] = self.p0_gsens
+        return cfg
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class FilterOutput:
+    """Filter estimates per sample (rows before the start sample are NaN); a leading run axis in batch mode.
+
+    Attributes
+    ----------
+    quat : (..., N, 4) attitude body->world (w, x, y, z).
+    vel : (..., N, 3) m/s, pos : (..., N, 3) m -- world ENU.
+    bias_acc : (..., N, 3) m/s^2, bias_gyr : (..., N, 3) rad/s, gsens : (..., N, 9) rad/s per m/s^2 -- the
+        estimates (zero when not estimated).
+    p_diag : (..., N, states) filtered error-state variances (SI units squared).
+    skipped_updates : int or (R,) array, updates skipped because a covariance was not positive definite.
+    """
+
+    quat: np.ndarray
+    vel: np.ndarray
+    pos: np.ndarray
+    bias_acc: np.ndarray
+    bias_gyr: np.ndarray
+    gsens: np.ndarray
+    p_diag: np.ndarray
+    skipped_updates: int | np.ndarray
+
+
+def _outputs(shape: tuple[int, ...], states: int) -> FilterOutput:
+    def nans(*tail):
+        return np.full(shape + tail, np.nan)
+
+    return FilterOutput(nans(4), nans(3), nans(3), nans(3), nans(3), nans(9), nans(states), 0)
+
+
+def _per_sample_heading_velocity(pseudo_velocity, shape: tuple[int, ...]) -> np.ndarray:
+    if pseudo_velocity is None:
+        return np.zeros(shape + (3,))
+    v = np.ascontiguousarray(np.broadcast_to(np.asarray(pseudo_velocity, float), shape + (3,)))
+    if not np.all(np.isfinite(v)):
+        raise ValueError("ZUPT pseudo-velocity contains NaN or inf values")
+    return v
+
+
+def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
+               vel0=(0.0, 0.0, 0.0), pos0=(0.0, 0.0, 0.0), start: int = 0, config: FilterConfig = FilterConfig(),
+               method: str = "rk4", pseudo_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
+    """Run the ZUPT-aided EKF over one recording.
+
+    Parameters
+    ----------
+    t : (N,) s, strictly increasing.
+    acc : (N, 3) m/s^2 specific force, or m/s increments ``dv`` when ``method="increments"``.
+    gyr : (N, 3) rad/s angular rate, or rad increments ``dth`` when ``method="increments"``.
+    stationary : (N,) bool, samples where the ZUPT (and ZARU, if configured) is applied.
+    quat0 : (4,) attitude at sample ``start`` (body->world, w first); vel0 (m/s), pos0 (m): world ENU.
+    start : index of the first navigated sample (earlier rows of the output are NaN).
+    config : FilterConfig.
+    method : "rk4" (point samples) or "increments" (exact dv, dth; see nav.strapdown).
+    pseudo_velocity : None (zero), a (3,) constant or an (N, 3) per-sample velocity in m/s in the foot's
+        heading frame (x forward along the horizontal heading, y left, z up), used at stationary samples.
+    rts : smooth the state with an RTS pass after the forward filter.
+
+    Returns
+    -------
+    FilterOutput.
+    """
+    t = np.ascontiguousarray(t, float)
+    acc = np.ascontiguousarray(acc, float)
+    gyr = np.ascontiguousarray(gyr, float)
+    n = len(t)
+    stationary = np.ascontiguousarray(stationary, bool)
+    if stationary.shape != (n,) or acc.shape != (n, 3) or gyr.shape != (n, 3):
+        raise ValueError(f"run_filter: shapes t {t.shape}, acc {acc.shape}, gyr {gyr.shape}, stationary "
+                         f"{stationary.shape} do not match (N,), (N,3), (N,3), (N,)")
+    if not 0 <= start < n:
+        raise ValueError(f"run_filter: start sample {start} outside 0..{n - 1}")
+    mode, acc_mid, gyr_mid = mechanisation_inputs(t, acc, gyr, method)
+    v_heading = _per_sample_heading_velocity(pseudo_velocity, (n,))
+    zaru = stationary if config.zaru else np.zeros(n, bool)
+    out = _outputs((n,), config.states)
+    q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
+    out.skipped_updates = _kernels.filter_run(
+        mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, int(start), q0,
+        np.asarray(vel0, float), np.asarray(pos0, float), config.states, config.as_array(), bool(rts),
+        out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr, out.gsens, out.p_diag)
+    return out
+
+
+def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
+                     vel0=None, pos0=None, start=None, config: FilterConfig = FilterConfig(), method: str = "rk4",
+                     pseudo_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
+    """Run the filter over R recordings of N samples each in one compiled call (runs spread over cores).
+
+    Same parameters as :func:`run_filter` with a leading run axis: t (R, N) or (N,) shared, acc and gyr
+    (R, N, 3), stationary (R, N), quat0 (R, 4), vel0 and pos0 (R, 3) (default zero), start (R,) (default 0),
+    pseudo_velocity None, (3,), (R, 3) or (R, N, 3). Results equal :func:`run_filter` on each run (same compiled
+    code per run).
+    """
+    acc = np.ascontiguousarray(acc, float)
+    gyr = np.ascontiguousarray(gyr, float)
+    if acc.ndim != 3 or acc.shape[2] != 3 or gyr.shape != acc.shape:
+        raise ValueError(f"run_filter_batch: acc {acc.shape} and gyr {gyr.shape} must both be (R, N, 3)")
+    runs, n = acc.shape[:2]
+    t = np.asarray(t, float)
+    shared_time = t.ndim == 1
+    t = np.ascontiguousarray(np.broadcast_to(t, (runs, n)))
+    stationary = np.ascontiguousarray(np.broadcast_to(np.asarray(stationary, bool), (runs, n)))
+    if method == "increments":
+        mode, acc_mid, gyr_mid = _kernels.MODE_INCREMENTS, acc, gyr
+    elif shared_time:  # interpolate every run at once along the common time axis
+        mode = _kernels.MODE_POINT_SAMPLES
+        acc_mid = np.ascontiguousarray(mid_samples(t[0], acc.transpose(1, 0, 2)).transpose(1, 0, 2))
+        gyr_mid = np.ascontiguousarray(mid_samples(t[0], gyr.transpose(1, 0, 2)).transpose(1, 0, 2))
+    else:
+        mode = _kernels.MODE_POINT_SAMPLES
+        acc_mid = np.stack([mid_samples(t[r], acc[r]) for r in range(runs)])
+        gyr_mid = np.stack([mid_samples(t[r], gyr[r]) for r in range(runs)])
+    pv = None if pseudo_velocity is None else np.asarray(pseudo_velocity, float)
+    if pv is not None and pv.ndim == 2:
+        pv = pv[:, None, :]
+    v_heading = _per_sample_heading_velocity(pv, (runs, n))
+    zaru = stationary if config.zaru else np.zeros((runs, n), bool)
+    q0 = np.asarray(quat0, float).reshape(runs, 4)
+    q0 = np.ascontiguousarray(q0 / np.linalg.norm(q0, axis=1, keepdims=True))
+    vel0 = np.zeros((runs, 3)) if vel0 is None else np.ascontiguousarray(np.broadcast_to(vel0, (runs, 3)), float)
+    pos0 = np.zeros((runs, 3)) if pos0 is None else np.ascontiguousarray(np.broadcast_to(pos0, (runs, 3)), float)
+    start = np.zeros(runs, np.int64) if start is None else np.ascontiguousarray(np.broadcast_to(start, (runs,)),
+                                                                               np.int64)
+    if np.any(start < 0) or np.any(start >= n):
+        raise ValueError(f"run_filter_batch: start samples {start} outside 0..{n - 1}")
+    cfg = np.ascontiguousarray(np.broadcast_to(config.as_array(), (runs, _kernels.CFG_SIZE)))
+    out = _outputs((runs, n), config.states)
+    skipped = np.zeros(runs, np.int64)
+    _kernels.filter_batch(mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, start, q0, vel0, pos0,
+                          config.states, cfg, bool(rts), out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr,
+                          out.gsens, out.p_diag, skipped)
+    out.skipped_updates = skipped
+    return out

@@ -1,0 +1,200 @@
+"""Scores of a navigation solution against truth or a reference track, and summaries across runs.
+
+Sign conventions (all lengths in m, horizontal unless stated):
+
+- Along-track and perpendicular axes: the true start->end direction u (horizontal) and its left normal
+  n = z x u. For a straight walk these are "along the path" and "to the left of it".
+- ``along_track_error_m`` = true distance - estimated end projected on u: **positive = the estimate is too
+  short** (the length underestimate the seed paper studies). ``along_track_error_pct`` is that in % of the true
+  start->end distance; ``length_ratio`` = estimated along-track distance / true distance.
+- ``perpendicular_error_m``: estimated end on n, minus the true end's (zero by construction): positive = left.
+- ``final_error_m``: horizontal distance between the estimated and true end points (``final_error_3d_m`` in 3D).
+- ``heading_drift_deg_per_s``: slope of a least-squares line through the heading error (estimate - truth,
+  unwrapped; from the attitude when the true attitude is known, else from the direction of the track seen from
+  its start, on points more than 2 m away); ``heading_drift_deg_per_100m`` = slope * duration / path length * 100.
+- ``ate_m``: RMS horizontal position error after the stated alignment: "start" = none beyond the common
+  start point (the filter starts at the true position); ``ate_se2_m`` after the least-squares rotation about z
+  and horizontal translation (Kabsch/Umeyama, no scale).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+TRACK_DIRECTION_MIN_DISTANCE = 2.0  # m, points closer to the start give no usable track direction
+LOOP_DISTANCE = 1.0  # m, below this start->end distance the along/perpendicular axes are undefined
+PATH_SAMPLE_INTERVAL = 0.25  # s, spacing of the polyline used for path lengths
+
+
+def _path_length(t: np.ndarray, pos: np.ndarray) -> float:
+    grid = np.arange(t[0], t[-1], PATH_SAMPLE_INTERVAL)
+    grid = np.append(grid, t[-1])
+    xy = np.stack([np.interp(grid, t, pos[:, i]) for i in range(2)], -1)
+    return float(np.sum(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def _yaw(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.arctan2(2 * (x * y + w * z), 1 - 2 * (y * y + z * z))
+
+
+def end_point_errors(est_end: np.ndarray, true_start: np.ndarray, true_end: np.ndarray) -> dict:
+    """Along-track, perpendicular and final errors of an end point (see the module docstring for signs).
+
+    Parameters
+    ----------
+    est_end, true_start, true_end : (3,) m, world ENU.
+    """
+    est_end, true_start, true_end = (np.asarray(a, float) for a in (est_end, true_start, true_end))
+    d_true = (true_end - true_start)[:2]
+    distance = float(np.hypot(*d_true))
+    out = {
+        "distance_m": distance,
+        "final_error_m": float(np.hypot(*(est_end - true_end)[:2])),
+        "final_error_3d_m": float(np.linalg.norm(est_end - true_end)),
+        "vertical_error_m": float(est_end[2] - true_end[2]),
+    }
+    if distance < LOOP_DISTANCE:
+        out.update(along_track_error_m=math.nan, along_track_error_pct=math.nan, length_ratio=math.nan,
+                   perpendicular_error_m=math.nan)
+        return out
+    u = d_true / distance
+    normal = np.array([-u[1], u[0]])
+    d_est = (est_end - true_start)[:2]
+    along = float(d_est @ u)
+    out.update(
+        along_track_error_m=distance - along,
+        along_track_error_pct=100.0 * (distance - along) / distance,
+        length_ratio=along / distance,
+        perpendicular_error_m=float(d_est @ normal),
+    )
+    return out
+
+
+def heading_drift(t: np.ndarray, heading_error: np.ndarray) -> float:
+    """Slope (rad/s) of a least-squares line through an unwrapped heading error (rad) over time (s)."""
+    ok = np.isfinite(heading_error)
+    if ok.sum() < 2:
+        return math.nan
+    e = np.unwrap(heading_error[ok])
+    return float(np.polyfit(t[ok], e, 1)[0])
+
+
+def track_heading_error(est_pos: np.ndarray, true_pos: np.ndarray) -> np.ndarray:
+    """Angle (rad) from the true to the estimated track direction seen from the common start; NaN near it."""
+    d_true = true_pos[:, :2] - true_pos[0, :2]
+    d_est = est_pos[:, :2] - true_pos[0, :2]
+    err = _wrap(np.arctan2(d_est[:, 1], d_est[:, 0]) - np.arctan2(d_true[:, 1], d_true[:, 0]))
+    far = np.hypot(d_true[:, 0], d_true[:, 1]) > TRACK_DIRECTION_MIN_DISTANCE
+    return np.where(far, err, np.nan)
+
+
+def se2_aligned(est_xy: np.ndarray, true_xy: np.ndarray) -> np.ndarray:
+    """est_xy (M, 2) rotated and translated to fit true_xy (M, 2) in the least-squares sense (no scale)."""
+    me, mt = est_xy.mean(axis=0), true_xy.mean(axis=0)
+    h = (est_xy - me).T @ (true_xy - mt)
+    u, _, vt = np.linalg.svd(h)
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    r = vt.T @ np.diag([1.0, d]) @ u.T
+    return (est_xy - me) @ r.T + mt
+
+
+def confusion(detected: np.ndarray, true_stance: np.ndarray) -> dict:
+    """Detector confusion counts and rates against true stance labels (both (N,) bool)."""
+    d = np.asarray(detected, bool)
+    s = np.asarray(true_stance, bool)
+    tp, fp = int(np.sum(d & s)), int(np.sum(d & ~s))
+    fn, tn = int(np.sum(~d & s)), int(np.sum(~d & ~s))
+    return {
+        "true_positive": tp, "false_positive": fp, "false_negative": fn, "true_negative": tn,
+        "precision": tp / (tp + fp) if tp + fp else math.nan,
+        "recall": tp / (tp + fn) if tp + fn else math.nan,
+        "accuracy": (tp + tn) / len(d) if len(d) else math.nan,
+    }
+
+
+def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray, quat: np.ndarray | None = None,
+          ref_quat: np.ndarray | None = None) -> dict:
+    """Score an estimated track against a true or reference track.
+
+    Parameters
+    ----------
+    t : (N,) s, pos : (N, 3) m -- the estimate (rows with NaN, e.g. before the start, are ignored).
+    ref_t : (M,) s, ref_pos : (M, 3) m -- truth or reference on its own clock (NaN rows ignored).
+    quat, ref_quat : (N, 4) and (M, 4) attitudes; when both are given the heading drift uses them.
+
+    Returns
+    -------
+    dict of floats (see the module docstring), SI units in the key names.
+    """
+    t = np.asarray(t, float)
+    pos = np.asarray(pos, float)
+    ok = np.all(np.isfinite(pos), axis=1)
+    t_est, p_est = t[ok], pos[ok]
+    ref_t = np.asarray(ref_t, float)
+    ref_pos = np.asarray(ref_pos, float)
+    rok = np.all(np.isfinite(ref_pos), axis=1) & (ref_t >= t_est[0]) & (ref_t <= t_est[-1])
+    rt, rp = ref_t[rok], ref_pos[rok]
+    if len(rt) < 2:
+        raise ValueError("score: the reference does not overlap the navigated time span")
+    ep = np.stack([np.interp(rt, t_est, p_est[:, i]) for i in range(3)], -1)
+    out = end_point_errors(ep[-1], rp[0], rp[-1])
+    duration = float(rt[-1] - rt[0])
+    path = _path_length(rt, rp)
+    ratio = _path_length(rt, ep) / path if path else math.nan
+    out.update(duration_s=duration, path_length_m=path, path_length_ratio=ratio)
+    if quat is not None and ref_quat is not None:
+        q_est = np.asarray(quat, float)[ok]
+        yaw_est = np.interp(rt, t_est, np.unwrap(_yaw(q_est)))
+        err = _wrap(yaw_est - _yaw(np.asarray(ref_quat, float)[rok]))
+        out["heading_drift_source"] = "attitude yaw (estimate - truth)"
+    else:
+        err = track_heading_error(ep, rp)
+        out["heading_drift_source"] = "track direction seen from the start (estimate - reference)"
+    rate = heading_drift(rt, err)
+    out["heading_drift_deg_per_s"] = math.degrees(rate)
+    out["heading_drift_deg_per_100m"] = math.degrees(rate) * duration / path * 100.0 if path else math.nan
+    horizontal = ep[:, :2] - rp[:, :2]
+    out["ate_m"] = float(np.sqrt(np.mean(np.sum(horizontal**2, axis=1))))
+    out["ate_alignment"] = "start: none beyond the common start point"
+    aligned = se2_aligned(ep[:, :2], rp[:, :2])
+    out["ate_se2_m"] = float(np.sqrt(np.mean(np.sum((aligned - rp[:, :2]) ** 2, axis=1))))
+    return out
+
+
+def error_ellipse(points: np.ndarray, sigmas: float = 3.0) -> dict:
+    """The ``sigmas``-sigma ellipse of 2-D points (R, 2) m: centre, semi-axes (m) and major-axis angle (deg)."""
+    points = np.asarray(points, float)
+    centre = points.mean(axis=0)
+    if len(points) < 2:
+        return {"centre_m": centre.tolist(), "semi_major_m": math.nan, "semi_minor_m": math.nan,
+                "angle_deg": math.nan, "sigmas": sigmas}
+    cov = np.cov(points.T)
+    values, vectors = np.linalg.eigh(cov)
+    major = vectors[:, 1]
+    return {"centre_m": centre.tolist(), "semi_major_m": float(sigmas * math.sqrt(max(values[1], 0.0))),
+            "semi_minor_m": float(sigmas * math.sqrt(max(values[0], 0.0))),
+            "angle_deg": math.degrees(math.atan2(major[1], major[0])), "sigmas": sigmas}
+
+
+def summarise_runs(scores: list[dict]) -> dict:
+    """Mean, standard deviation, min and max of every numeric score over runs, and the 3-sigma end-point ellipse.
+
+    The ellipse is of the (along-track error, perpendicular error) pairs, in m.
+    """
+    out = {"runs": len(scores)}
+    keys = [k for k in scores[0] if isinstance(scores[0][k], (int, float)) and not isinstance(scores[0][k], bool)]
+    for k in keys:
+        v = np.array([s[k] for s in scores], float)
+        out[k] = {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v, ddof=1)) if len(v) > 1 else math.nan,
+                  "min": float(np.nanmin(v)), "max": float(np.nanmax(v))}
+    if "along_track_error_m" in keys and "perpendicular_error_m" in keys:
+        pts = np.array([[s["along_track_error_m"], s["perpendicular_error_m"]] for s in scores], float)
+        out["end_point_ellipse_3sigma"] = error_ellipse(pts[np.all(np.isfinite(pts), axis=1)], 3.0)
+    return out

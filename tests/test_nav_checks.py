@@ -1,0 +1,81 @@
+"""Bad input (nav.checks and the pipeline): each problem is a clear error or a counted warning."""
+
+import numpy as np
+import pytest
+from nav_synthetic import synthetic_walk
+
+from nav import pipeline
+from nav.checks import check_recording
+from nav.recording import Recording, RecordingError
+
+
+@pytest.fixture(scope="module")
+def walk():
+    return synthetic_walk(strides=3)
+
+
+def variant(rec, t=None, acc=None, gyr=None):
+    return Recording(rec.t if t is None else t, rec.acc if acc is None else acc, rec.gyr if gyr is None else gyr, {})
+
+
+def test_clean_recording_passes_without_warnings(walk):
+    report = check_recording(walk)
+    assert report.warnings == []
+    assert report.counts["static_specific_force"] == pytest.approx(9.81, rel=1e-9)
+
+
+def test_nan_and_inf_samples_are_counted_per_column(walk):
+    acc = walk.acc.copy()
+    acc[[5, 9], 1] = np.nan
+    acc[7, 2] = np.inf
+    expected = r"3 NaN/inf values \(per column \{'acc_y': 2, 'acc_z': 1\}; first at row 5"
+    with pytest.raises(RecordingError, match=expected):
+        check_recording(variant(walk, acc=acc))
+
+
+def test_repeated_and_decreasing_timestamps_are_errors(walk):
+    t = walk.t.copy()
+    t[10] = t[9]
+    t[20] = t[18]
+    with pytest.raises(RecordingError, match="1 repeated and 1 decreasing timestamps .first at row 10"):
+        check_recording(variant(walk, t=t))
+
+
+def test_irregular_intervals_are_a_counted_warning(walk):
+    t = walk.t.copy()
+    t[100:] += 0.0006  # one interval 48 % longer than the others
+    with pytest.warns(UserWarning, match="1 of"):
+        report = check_recording(variant(walk, t=t))
+    assert report.counts["irregular_intervals"] == 1
+
+
+def test_accelerometer_in_g_is_an_error(walk):
+    with pytest.raises(RecordingError, match="looks like it reports g"):
+        check_recording(variant(walk, acc=walk.acc / 9.81))
+
+
+def test_gyro_in_deg_per_s_is_an_error(walk):
+    with pytest.raises(RecordingError, match="deg/s"):
+        check_recording(variant(walk, gyr=np.degrees(walk.gyr) * 3))  # peak ~ 2.4 rad/s -> 410 deg/s
+
+
+def test_static_gyro_offset_too_large_for_rad_s_warns(walk):
+    with pytest.warns(UserWarning, match="at rest"):
+        check_recording(variant(walk, gyr=walk.gyr + np.degrees(0.01)))
+
+
+def test_too_short_to_align_and_no_stance_are_errors(walk):
+    short = variant(walk, t=walk.t[:10], acc=walk.acc[:10], gyr=walk.gyr[:10])
+    with pytest.raises(RecordingError, match="too short or never at rest"):
+        pipeline.navigate(short, pipeline.NavOptions(detector="shoe"))
+    with pytest.raises(RecordingError, match="no stance found"):
+        noisy = walk.acc + np.random.default_rng(0).normal(0, 0.01, walk.acc.shape)  # T ~ 1 at rest
+        pipeline.navigate(variant(walk, acc=noisy), pipeline.NavOptions(detector="shoe", threshold=1e-3))
+
+
+def test_oracle_and_increments_need_truth(walk):
+    bare = variant(walk)
+    with pytest.raises(RecordingError, match="oracle"):
+        pipeline.navigate(bare, pipeline.NavOptions(detector="oracle"))
+    with pytest.raises(RecordingError, match="increments"):
+        pipeline.navigate(bare, pipeline.NavOptions(method="increments"))

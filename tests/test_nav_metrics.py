@@ -1,0 +1,88 @@
+"""Scores (nav.metrics): sign conventions, drift fit, alignment, confusion, run summaries."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nav import metrics
+
+
+def straight_north(n=1001, length=100.0):
+    t = np.linspace(0.0, 100.0, n)
+    pos = np.stack([np.zeros(n), length * t / t[-1], np.zeros(n)], -1)
+    return t, pos
+
+
+def yaw_quat(yaw):
+    return np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], -1)
+
+
+def test_short_and_left_estimate_signs():
+    t, truth = straight_north()
+    est = truth * np.array([1.0, 0.98, 1.0]) + np.array([-0.5, 0.0, 0.0]) * (t / t[-1])[:, None]
+    s = metrics.score(t, est, t, truth)
+    assert s["along_track_error_m"] == pytest.approx(2.0, rel=1e-12)  # 2 m short: positive
+    assert s["along_track_error_pct"] == pytest.approx(2.0, rel=1e-12)
+    assert s["length_ratio"] == pytest.approx(0.98, rel=1e-12)
+    assert s["perpendicular_error_m"] == pytest.approx(0.5, rel=1e-12)  # west of a walk north = left
+    assert s["final_error_m"] == pytest.approx(math.hypot(2.0, 0.5), rel=1e-12)
+
+
+def test_heading_drift_from_attitude_and_from_track():
+    t, truth = straight_north()
+    rate = math.radians(0.028)  # deg/s -> rad/s
+    q_true = yaw_quat(np.full(len(t), np.pi / 2))
+    q_est = yaw_quat(np.pi / 2 + rate * t)
+    s = metrics.score(t, truth, t, truth, q_est, q_true)
+    assert s["heading_drift_deg_per_s"] == pytest.approx(0.028, rel=1e-9)
+    assert s["heading_drift_deg_per_100m"] == pytest.approx(0.028 * 100.0 / 100.0 * 100, rel=1e-6)
+    # a track turned by a constant angle seen from the start: zero drift, not a rate
+    c, s_ = np.cos(0.01), np.sin(0.01)
+    turned = truth @ np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]]).T
+    assert metrics.score(t, turned, t, truth)["heading_drift_deg_per_s"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_ate_after_se2_alignment_removes_a_rigid_motion():
+    t, truth = straight_north()
+    truth[:, 0] = np.sin(truth[:, 1] / 10.0)  # a wiggly path so the rotation is determined
+    c, s_ = np.cos(0.2), np.sin(0.2)
+    est = truth @ np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]]).T + [3.0, -1.0, 0.0]
+    scores = metrics.score(t, est, t, truth)
+    assert scores["ate_m"] > 3.0
+    assert scores["ate_se2_m"] < 1e-9
+
+
+def test_confusion_counts():
+    det = np.array([1, 1, 0, 0, 1], bool)
+    true = np.array([1, 0, 0, 1, 1], bool)
+    c = metrics.confusion(det, true)
+    assert (c["true_positive"], c["false_positive"], c["false_negative"], c["true_negative"]) == (2, 1, 1, 1)
+    assert c["precision"] == pytest.approx(2 / 3) and c["recall"] == pytest.approx(2 / 3)
+
+
+def test_three_sigma_ellipse_of_known_covariance():
+    rng = np.random.default_rng(0)
+    cov = np.array([[4.0, 1.5], [1.5, 1.0]])
+    pts = rng.multivariate_normal([1.0, -2.0], cov, 200_000)
+    e = metrics.error_ellipse(pts)
+    values, vectors = np.linalg.eigh(cov)
+    assert e["semi_major_m"] == pytest.approx(3 * math.sqrt(values[1]), rel=0.01)
+    assert e["semi_minor_m"] == pytest.approx(3 * math.sqrt(values[0]), rel=0.01)
+    expected_angle = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
+    assert math.cos(math.radians(e["angle_deg"] - expected_angle)) ** 2 == pytest.approx(1.0, abs=1e-4)
+
+
+def test_summary_over_runs():
+    runs = [{"along_track_error_m": a, "perpendicular_error_m": p, "name": "x"} for a, p in [(1, 0), (2, 1), (3, -1)]]
+    s = metrics.summarise_runs(runs)
+    assert s["along_track_error_m"]["mean"] == 2.0 and s["along_track_error_m"]["std"] == pytest.approx(1.0)
+    assert "name" not in s and s["runs"] == 3
+    assert s["end_point_ellipse_3sigma"]["centre_m"] == [2.0, 0.0]
+
+
+def test_loops_have_no_along_track_axis():
+    t = np.linspace(0, 10, 101)
+    loop = np.stack([np.cos(t * 2 * np.pi / 10) - 1, np.sin(t * 2 * np.pi / 10), 0 * t], -1) * 5
+    s = metrics.score(t, loop + [0.1, 0.0, 0.0], t, loop)
+    assert math.isnan(s["along_track_error_m"]) and s["final_error_m"] == pytest.approx(0.1, rel=1e-9)
