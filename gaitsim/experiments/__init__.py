@@ -1,0 +1,1 @@
+"""Experiments: the seed paper's study end to end (``gaitsim reproduce``) and Monte Carlo runs (``gaitsim run``)."""

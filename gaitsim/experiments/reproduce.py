@@ -1,0 +1,107 @@
+"""``gaitsim reproduce``: the seed paper end to end, then beyond it, deterministic from scenarios/paper.toml.
+
+Steps: the simulated calibration lab (own seed) -> stance pseudo-velocity from tracked calibration walks (own
+seeds) -> Monte Carlo tasks through :func:`gaitsim.runner.run_tasks` (resumable, parallel, optionally Dask) ->
+gait-cycle analysis of run 0 -> tables, figures and results/README.md (:mod:`gaitsim.experiments.report`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+
+import numpy as np
+
+from nav.metrics import summarise_runs
+
+from ..runner import run_tasks
+from ..scenario import load_scenario, scenario_from_dict
+from ..tracker import TrackerSpec
+from ..truth import simulate_walk
+from . import report
+from .cycle import cycle_averages, detected_stance_s, predicted_length_loss
+from .paper import build_tasks, quick_overrides
+from .setup import calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario
+from .tasks import walk_task
+
+PAPER = Path(__file__).resolve().parents[2] / "scenarios" / "paper.toml"
+
+
+def _collect(results: list[dict], tasks: list[dict], prefix: str) -> dict[str, list[dict]]:
+    """Scores per variant name over the tasks whose key starts with ``prefix``."""
+    out: dict[str, list[dict]] = {}
+    for task, res in zip(tasks, results):
+        if task["key"].startswith(prefix):
+            for name, score in res["variants"].items():
+                out.setdefault(name, []).append(score)
+    return out
+
+
+def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = False, workers: int | None = None,
+              scheduler: str | None = None, progress: bool = True) -> dict:
+    """Regenerate the report in ``out``; returns the summary numbers (also in ``out/summary.json``)."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    timings = {}
+    clock = time.perf_counter()
+    scenario = load_scenario(scenario_path)
+    nav, exp = settings_from_scenario(scenario)
+    doc = scenario_doc(scenario)
+    runs = scenario.runs
+    if quick:
+        doc, exp, runs = quick_overrides(doc, exp)
+    work = out / ("cache-quick" if quick else "cache")
+
+    cal = calibrate_sensor(scenario, exp, out)
+    stance, stance_info = fit_stance_velocity(doc, nav, exp, cal, out)
+    timings["calibration lab and stance-velocity walks"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    tasks = build_tasks(doc, nav, exp, runs, scenario.seed, str(cal), str(stance))
+    results = run_tasks(walk_task, tasks, work, workers=None if scheduler else (workers or exp.workers),
+                        scheduler=scheduler, progress=progress)
+    timings[f"Monte Carlo ({len(tasks)} walks)"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    rec0 = simulate_walk(scenario_from_dict(doc, "cycle analysis"), seed=scenario.seed, run=0)
+    tracker = TrackerSpec(exp.tracker_rate_hz, exp.tracker_resolution_m, exp.tracker_noise_m)
+    thresholds = sorted(set(exp.fig4_thresholds) | set(exp.threshold_sweep))
+    avg = cycle_averages(rec0, exp.cycle_count, nav.sigma_a_mps2, np.deg2rad(nav.sigma_g_dps), nav.window,
+                         thresholds, tracker, np.random.default_rng([scenario.seed, 7]))
+    stance_s = detected_stance_s(avg)
+    strides = results[0]["walk"]["strides"]
+    predicted = predicted_length_loss(avg, avg.detected, strides)
+    timings["gait-cycle analysis"] = time.perf_counter() - clock
+
+    main = _collect(results, tasks, "main/")
+    summary = {
+        "quick": quick, "runs": runs, "scenario": str(scenario_path), "nav": dataclasses.asdict(nav),
+        "experiment": dataclasses.asdict(exp), "stance_velocity_fit": stance_info,
+        "compensation": {v: summarise_runs(main[v]) for v in main if "@" not in v and ":" not in v},
+        "threshold_sweep": {float(v.split("@")[1]): [s["along_track_error_m"] for s in main[v]]
+                            for v in main if v.startswith("before@")},
+        "predicted_loss": {float(k): v for k, v in predicted.items()},
+        "detected_stance": {float(k): v for k, v in stance_s.items()},
+        "heading": _collect(results, tasks, "heading/")["g_sensitivity_alone"][0],
+        "budget": {v: summarise_runs(s) for v, s in _collect(results, tasks, "budget/").items()},
+        "sensitivity": _sensitivity(results, tasks, main),
+        "walk": results[0]["walk"],
+    }
+    summary["timings_s"] = timings
+    report.write(out, summary, main, avg, results, tasks, doc)
+    report.write_json(out / "summary.json", report.jsonable({k: v for k, v in summary.items()}))
+    return summary
+
+
+def _sensitivity(results, tasks, main) -> dict:
+    rows = {}
+    for task, res in zip(tasks, results):
+        if task["key"].startswith("sensitivity/"):
+            group = task["key"].split("/")[1].rsplit("-run-", 1)[0]
+            for name, score in res["variants"].items():
+                rows.setdefault(f"{group} {name}", []).append(score)
+    for name, scores in main.items():
+        if ":" in name:
+            rows[name.replace(":", " ")] = scores
+    return {k: summarise_runs(v) for k, v in rows.items()}

@@ -1,0 +1,151 @@
+"""Experiment settings from a scenario file's [nav] and [experiment] tables, and the one-off calibrations.
+
+The compensation is estimated the way a lab would: the readout calibration from the simulated calibration lab
+(its own seed), the stance pseudo-velocity from tracked calibration walks (their own seeds) -- never from the
+truth of the runs being scored.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from nav import detectors
+from nav.ekf import FilterConfig
+from nav.pipeline import NavOptions, prepare
+from nav.recording import Recording
+from nav.zupt_velocity import StanceVelocityProfile, save_stance_velocity, stance_velocities
+
+from ..errors import ScenarioError
+from ..imu.calibration_lab import run_lab
+from ..scenario import Scenario, fill, scenario_from_dict
+from ..tracker import TrackerSpec, track
+from ..truth import simulate_walk
+
+
+@dataclass(frozen=True)
+class NavSettings:
+    """The [nav] table: detector and filter of every run (units in the names)."""
+
+    detector: str = "shoe"
+    threshold: float = 3.0e4
+    sigma_a_mps2: float = 0.01
+    sigma_g_dps: float = 0.1
+    window: int = 3
+    states: int = 9
+
+    def options(self, **changes) -> NavOptions:
+        base = NavOptions(detector=self.detector, threshold=self.threshold, sigma_a=self.sigma_a_mps2,
+                          sigma_g=np.deg2rad(self.sigma_g_dps), window=self.window,
+                          filter=FilterConfig(states=self.states))
+        return dataclasses.replace(base, **changes)
+
+
+@dataclass(frozen=True)
+class ExperimentSettings:
+    """The [experiment] table of the paper reproduction (see scenarios/paper.toml for each value's meaning)."""
+
+    lab_seed: int = 101
+    calibration_walk_seed: int = 202
+    calibration_walks: int = 3
+    tracker_rate_hz: float = 60.0
+    tracker_resolution_m: float = 0.001
+    tracker_noise_m: float = 0.0005
+    stance_profile_knots: int = 21
+    before_calibration_terms: tuple[str, ...] = ("bias",)
+    threshold_sweep: tuple[float, ...] = (1e4, 2e4, 3e4, 4e4, 5e4)
+    threshold_sweep_runs: int = 10
+    fig4_thresholds: tuple[float, ...] = (1e4, 2e4, 3e4)
+    cycle_count: int = 70
+    heading_walk_length_m: float = 550.0
+    budget_runs: int = 10
+    sensitivity_runs: int = 4
+    sensitivity_cadences: tuple[float, ...] = (70.0, 84.0, 100.0)
+    sensitivity_mounts: tuple[str, ...] = ("toes", "instep", "heel")
+    sensitivity_presets: tuple[str, ...] = ("bmi160", "vn200", "adis16497")
+    sensitivity_detectors: tuple[str, ...] = ("shoe", "are", "mv", "mag")
+    workers: int = 2
+
+
+def _tuple_fields(cls) -> dict:
+    return {f.name: f.default for f in dataclasses.fields(cls) if isinstance(f.default, tuple)}
+
+
+def settings_from_scenario(scenario: Scenario) -> tuple[NavSettings, ExperimentSettings]:
+    """Validate the [nav] and [experiment] tables (unknown keys and wrong types refused)."""
+    nav = fill(NavSettings, scenario.nav, f"{scenario.source} [nav]")
+    if nav.detector not in detectors.DETECTORS:
+        raise ScenarioError(f"{scenario.source} [nav]: detector = {nav.detector!r}; allowed: {detectors.DETECTORS}")
+    if nav.states not in (9, 15, 24):
+        raise ScenarioError(f"{scenario.source} [nav]: states = {nav.states}; allowed: 9, 15, 24")
+    table = dict(scenario.experiment)
+    lists = {}
+    for key, default in _tuple_fields(ExperimentSettings).items():
+        if key in table:
+            value = table.pop(key)
+            kind = type(default[0])
+            if not (isinstance(value, list) and value and all(isinstance(v, (int, float, str)) for v in value)):
+                raise ScenarioError(f"{scenario.source} [experiment]: {key} = {value!r} must be a non-empty list")
+            lists[key] = tuple(kind(v) for v in value)
+    exp = dataclasses.replace(fill(ExperimentSettings, table, f"{scenario.source} [experiment]"), **lists)
+    return nav, exp
+
+
+def scenario_doc(scenario: Scenario) -> dict:
+    """The scenario as a TOML-like dict that :func:`gaitsim.scenario.scenario_from_dict` rebuilds (for tasks)."""
+    import tomllib
+
+    with open(scenario.source, "rb") as fh:
+        return tomllib.load(fh)
+
+
+def patched(doc: dict, **sections) -> dict:
+    """A deep copy of ``doc`` with the given sections' keys replaced (``path`` is replaced whole)."""
+    out = copy.deepcopy(doc)
+    for section, table in sections.items():
+        if section == "path" or table is None:
+            out[section] = copy.deepcopy(table)
+            if table is None:
+                del out[section]
+        else:
+            out.setdefault(section, {}).update(copy.deepcopy(table))
+    return out
+
+
+def calibrate_sensor(scenario: Scenario, exp: ExperimentSettings, out: Path) -> Path:
+    """Run the simulated calibration lab on the scenario's sensor (own seed) and write calibration.json."""
+    path = out / "calibration.json"
+    run_lab(scenario.sensor, np.random.default_rng(exp.lab_seed), out_path=path)
+    return path
+
+
+def fit_stance_velocity(doc: dict, nav: NavSettings, exp: ExperimentSettings, calibration: Path, out: Path,
+                        threshold: float | None = None) -> tuple[Path, dict]:
+    """Fit the stance pseudo-velocity from tracked calibration walks with their own seeds.
+
+    Each calibration walk is recorded by the IMU (stance detected exactly as in the scored runs: same detector,
+    threshold and readout calibration) and by the simulated 60 Hz tracker; the tracked velocity, interpolated to
+    the IMU samples and rotated into the foot's heading frame, is averaged over normalised detected-stance time.
+    """
+    threshold = nav.threshold if threshold is None else threshold
+    spec = TrackerSpec(exp.tracker_rate_hz, exp.tracker_resolution_m, exp.tracker_noise_m)
+    options = nav.options(threshold=threshold, calibration=calibration,
+                          calibration_terms=exp.before_calibration_terms)
+    scenario = scenario_from_dict(doc, "calibration walks")
+    stances = []
+    for k in range(exp.calibration_walks):
+        rec: Recording = simulate_walk(scenario, seed=exp.calibration_walk_seed, run=k)
+        tracked = track(rec.truth, spec, np.random.default_rng([exp.calibration_walk_seed, k]))
+        vel = np.column_stack([np.interp(rec.t, tracked.t, tracked.vel[:, i]) for i in range(3)])
+        stationary = prepare(rec, options).stationary
+        stances += stance_velocities(vel, rec.truth.quat, stationary)
+    meta = {"threshold": threshold, "walks": exp.calibration_walks, "seed": exp.calibration_walk_seed,
+            "tracker": dataclasses.asdict(spec), "stances": len(stances)}
+    model = StanceVelocityProfile.fit(stances, knots=exp.stance_profile_knots, metadata=meta)
+    path = out / f"stance_velocity_{threshold:.0f}.json"
+    save_stance_velocity(model, path)
+    return path, {"mean_forward_mps": float(np.mean(np.concatenate([s[:, 0] for s in stances]))), **meta}
