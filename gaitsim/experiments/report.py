@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -15,24 +14,6 @@ import numpy as np  # noqa: E402
 PAPER = {"perpendicular_error_m": (2.57, 0.31), "along_track_error_m": (1.95, 0.07), "final_error_m": (3.24, 0.50)}
 METRICS = ("perpendicular_error_m", "along_track_error_m", "final_error_m")
 HEADLINE = ("before", "calibration", "stance_velocity", "both")
-
-
-def jsonable(o):
-    if isinstance(o, dict):
-        return {str(k): jsonable(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [jsonable(v) for v in o]
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    return o
-
-
-def write_json(path: Path, doc: dict) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(json.dumps(doc, indent=2, sort_keys=True, default=float))
-    tmp.replace(path)
 
 
 def _table(path: Path, header: list[str], rows: list[list]) -> str:

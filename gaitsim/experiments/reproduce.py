@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from nav.metrics import summarise_runs
+from nav.solution import write_json
 
 from ..runner import run_tasks
 from ..scenario import load_scenario, scenario_from_dict
@@ -90,7 +91,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
     }
     summary["timings_s"] = timings
     report.write(out, summary, main, avg, results, tasks, doc)
-    report.write_json(out / "summary.json", report.jsonable({k: v for k, v in summary.items()}))
+    write_json(out / "summary.json", summary)
     return summary
 
 
