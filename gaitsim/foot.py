@@ -73,6 +73,7 @@ class FootModel:
         m.site_pos[imu] = m.site_pos[site(f"mount_{mount.site}")] + np.asarray(mount.offset_m, float)
         roll, pitch, yaw = np.deg2rad(mount.rpy_deg)
         m.site_quat[imu] = quat.from_euler_zyx(yaw, pitch, roll)
+        m.site_sameframe[imu] = 0  # the compiler flagged it as coinciding with the body frame; it no longer does
         self.mount = mount
         self.lever_arm = np.array(m.site_pos[imu])  # m, IMU site in the foot frame (from the heel contact)
         self._slices = {}

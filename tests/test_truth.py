@@ -240,3 +240,11 @@ def test_impact_ringing_adds_a_damped_resonance_at_its_frequency():
     assert abs(f[np.argmax(spec)] - f0) < 2.0
     # the oscillation is vertical displacement of the contact: sub-millimetre, and C4 (integrators unaffected)
     assert np.abs(ring.pos - base.pos).max() < accel / (2 * np.pi * f0) ** 2 * 1.5
+
+
+def test_mount_rotation_rotates_the_sensor_axes():
+    rpy = (12.0, -8.0, 0.0)
+    foot = FootModel(Mount(rpy_deg=rpy))
+    s = foot.sample(np.zeros((1, 6)), np.zeros((1, 6)), np.zeros((1, 6)))
+    c = Q.to_matrix(Q.from_euler_zyx(0.0, np.deg2rad(rpy[1]), np.deg2rad(rpy[0])))
+    np.testing.assert_allclose(s.acc[0], c.T @ [0, 0, G], atol=1e-12)
