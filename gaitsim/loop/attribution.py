@@ -1,0 +1,273 @@
+"""The loop: navigate the recording, fit its twin, rank residuals, attribute them to effects, add, repeat.
+
+:func:`run_loop` does, for one recording:
+
+1. navigate it with the shared filter (:data:`gaitsim.loop.twin.NAV_OPTIONS`) and score it against its
+   reference; compute its signature (:mod:`gaitsim.loop.residuals`);
+2. fit the twin (:mod:`gaitsim.loop.twin`), simulate it, treat the simulation as a measured recording (IMU
+   samples and a position reference only) and do the same;
+3. residuals = recording - twin: the signature residuals plus the navigation residuals ``nav_length_ratio``
+   (path-length ratio against a continuous reference, else the start-to-end length ratio), ``nav_heading_drift``
+   (deg/s) and ``nav_final_error`` (m). A navigation residual's uncertainty is the standard deviation of the
+   twin's value over ``NAV_REPEATS`` re-simulations with other seeds (gait variability and sensor noise), at
+   least its ``NAV_FLOOR``;
+4. rank the residuals by ``|value| / uncertainty`` (z). The largest significant one (z > ``NOISE_LEVEL``) not
+   yet acted on is tried against every effect of the library that moves it. Not acted on (but reported, and
+   used in the fits of effects that move them): ``DERIVED`` residuals (``stance_shoe`` is a function of the
+   stance gyro and accelerometer residuals) and the navigation residuals, which are the outcome the loop
+   predicts rather than a diagnostic of one effect.
+   Each effect's magnitude is fitted by minimising ``Q = sum z_i^2`` over the residuals the effect moves,
+   with a grid of ``GRID_POINTS`` values plus a bounded Brent refinement, re-simulating the twin each time
+   (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
+   The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
+5. the effect explaining the most is added to the twin when it explains at least ``EXPLAINED_FRACTION``,
+   lowers Q, and does no harm: no other residual it moves may grow by more than ``NOISE_LEVEL`` in z to above
+   ``NOISE_LEVEL`` (an effect that trades one residual for another is not what the recording shows).
+   Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
+   Steps 4-5 repeat for at most ``MAX_ROUNDS`` residuals.
+
+The predicted-versus-measured navigation discrepancy is ``|twin - recording|`` of each navigation metric,
+reported for the twin before any effect and after all accepted ones.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from nav import pipeline
+from nav.recording import Recording, RecordingError
+
+from . import effects as fx
+from . import residuals, twin as tw
+from .residuals import NOISE_LEVEL, Residual
+
+NAV_REPEATS = 3
+NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_error": 0.05}
+NAV_UNITS = {"nav_length_ratio": "1", "nav_heading_drift": "deg/s", "nav_final_error": "m"}
+EXPLAINED_FRACTION = 0.5
+DERIVED = ("stance_shoe",)
+MAX_ROUNDS = 8
+GRID_POINTS = 9
+BRENT_ITERATIONS = 12
+
+
+@dataclass
+class Side:
+    """One recording as the loop sees it: the recording, its signature and its navigation metrics."""
+
+    recording: Recording
+    signature: residuals.Signature
+    nav: dict
+    solution: object = None
+
+
+@dataclass
+class LoopResult:
+    """Everything the report needs (see :mod:`gaitsim.loop.report`)."""
+
+    measured: Side
+    twin_before: tw.Twin
+    twin_after: tw.Twin
+    before: Side
+    after: Side
+    residuals_before: dict
+    residuals_after: dict
+    attributions: list
+    nav_uncertainty: dict
+    context: dict = field(default_factory=dict)
+
+    def navigation_summary(self) -> dict:
+        """Per navigation metric: measured, twin before/after and the discrepancy |twin - measured| before/after."""
+        out = {}
+        for key, m in self.measured.nav.items():
+            b, a = self.before.nav.get(key, math.nan), self.after.nav.get(key, math.nan)
+            if not math.isfinite(m):
+                continue
+            out[key] = {"unit": NAV_UNITS[key], "measured": m, "twin_before": b, "twin_after": a,
+                        "discrepancy_before": abs(b - m), "discrepancy_after": abs(a - m)}
+        return out
+
+
+def navigation_metrics(rec: Recording) -> tuple[dict, object]:
+    """Navigate ``rec`` and return (metrics, solution): nav_length_ratio, nav_heading_drift, nav_final_error."""
+    sol, score = pipeline.run(rec, tw.NAV_OPTIONS)
+    ratio = score.get("path_length_ratio" if len(rec.reference.t) > 2 else "length_ratio", math.nan)
+    drift = score.get("heading_drift_deg_per_s", math.nan)
+    metrics = {"nav_length_ratio": float(ratio) if ratio is not None else math.nan,
+               "nav_heading_drift": float(drift) if drift is not None else math.nan,
+               "nav_final_error": float(score.get("final_error_m", math.nan))}
+    return metrics, sol
+
+
+def measure(rec: Recording, with_nav: bool = True) -> Side:
+    """Signature (with the continuous reference's track) and, optionally, navigation metrics of ``rec``."""
+    pos_t, pos = tw.reference_track(rec)
+    gravity = float(rec.meta.get("sampling", {}).get("gravity_mps2", 9.81))
+    sig = residuals.signature(rec.t, rec.acc, rec.gyr, pos_t, pos, gravity)
+    if not with_nav:
+        return Side(rec, sig, {})
+    nav, sol = navigation_metrics(rec)
+    return Side(rec, sig, nav, sol)
+
+
+def simulate_side(twin: tw.Twin, measured: Side, with_nav: bool, seed: int | None = None) -> Side:
+    """Simulate the twin and measure it like the recording (same kind of reference)."""
+    sim = tw.as_measured(tw.simulate(twin, seed))
+    if tw.reference_track(measured.recording)[0] is None:
+        sim.reference.t, sim.reference.pos = sim.reference.t[[0, -1]], sim.reference.pos[[0, -1]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # input checks on candidate twins (e.g. clipping) are expected
+        return measure(sim, with_nav)
+
+
+def compare(measured: Side, twin: Side, nav_uncertainty: dict) -> dict:
+    """All residuals measured - twin (signature residuals, plus navigation ones when both sides have them)."""
+    out = residuals.compare(measured.signature, twin.signature)
+    for key, m in measured.nav.items():
+        w = twin.nav.get(key, math.nan)
+        if math.isfinite(m) and math.isfinite(w):
+            out[key] = Residual(key, NAV_UNITS[key], m, w, m - w, nav_uncertainty[key])
+    return out
+
+
+def nav_uncertainty(twin: tw.Twin, measured: Side) -> dict:
+    """Standard deviation of the twin's navigation metrics over NAV_REPEATS seeds, floored by NAV_FLOOR."""
+    values = [simulate_side(twin, measured, True, twin.seed + 1 + k).nav for k in range(NAV_REPEATS)]
+    return {key: float(max(np.nanstd([v[key] for v in values], ddof=1) if NAV_REPEATS > 1 else 0.0, floor))
+            for key, floor in NAV_FLOOR.items()}
+
+
+def _q(res: dict, names) -> float:
+    return float(sum(res[n].z ** 2 for n in names if n in res and math.isfinite(res[n].z)))
+
+
+@dataclass
+class Fit:
+    """One effect fitted against one residual."""
+
+    effect: fx.Effect
+    magnitude: float
+    residuals: dict
+    side: Side
+    q_before: float
+    q_after: float
+    fraction: float
+    harmed: tuple = ()
+
+    def summary(self) -> dict:
+        return {"effect": self.effect.name, "magnitude": self.magnitude, "unit": self.effect.unit,
+                "fraction_explained": self.fraction, "q_before": self.q_before, "q_after": self.q_after,
+                "made_worse": list(self.harmed)}
+
+    @property
+    def acceptable(self) -> bool:
+        return self.fraction >= EXPLAINED_FRACTION and self.q_after < self.q_before and not self.harmed
+
+
+def fit_effect(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, acted: str, ctx: dict,
+               nav_unc: dict) -> Fit:
+    """Fit ``effect``'s magnitude (module docstring, step 4) and measure what it explains of ``acted``."""
+    use_nav = any(name.startswith("nav_") for name in effect.moves)
+    names = [n for n in base if n in effect.moves or n == acted]
+    low, high = effect.search_bounds(ctx)
+    cache = {}
+
+    def evaluate(m: float):
+        key = round(float(m), 12)
+        if key not in cache:
+            try:
+                changed = tw.match_noise(twin.with_changes(effect.changes(float(m), ctx)))
+                side = simulate_side(changed, measured, use_nav)
+            except (ValueError, RecordingError):  # e.g. the twin no longer shows regular strides
+                cache[key] = (math.inf, {}, None)
+            else:
+                res = compare(measured, side, nav_unc)
+                cache[key] = (_q(res, names), res, side)
+        return cache[key]
+
+    to_axis = (np.log if effect.log_scale else (lambda x: x))
+    from_axis = (np.exp if effect.log_scale else (lambda x: x))
+    axis = np.linspace(to_axis(low), to_axis(high), GRID_POINTS)
+    guess = effect.first_guess(base, ctx)
+    if guess is not None and math.isfinite(guess) and low < guess < high:
+        axis = np.sort(np.append(axis, to_axis(guess)))
+    costs = [evaluate(from_axis(a))[0] for a in axis]
+    i = int(np.argmin(costs))
+    lo_a, hi_a = axis[max(i - 1, 0)], axis[min(i + 1, len(axis) - 1)]
+    if hi_a > lo_a and math.isfinite(costs[i]):
+        found = minimize_scalar(lambda a: evaluate(from_axis(a))[0], bounds=(lo_a, hi_a), method="bounded",
+                                options={"maxiter": BRENT_ITERATIONS, "xatol": (hi_a - lo_a) * 1e-3})
+        best = found.x if found.fun <= costs[i] else axis[i]
+    else:
+        best = axis[i]
+    magnitude = float(from_axis(best))
+    q_after, res, side = evaluate(magnitude)
+    before, after = abs(base[acted].value), abs(res[acted].value) if acted in res else math.inf
+    fraction = 1.0 - after / before if before > 0 else 0.0
+    harmed = tuple(n for n in effect.moves if n != acted and n in base and n in res
+                   and res[n].z > NOISE_LEVEL and res[n].z > base[n].z + NOISE_LEVEL)
+    return Fit(effect, magnitude, res, side, _q(base, names), q_after, float(fraction), harmed)
+
+
+def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:
+    after = best.residuals.get(acted.name) if (best is not None and accepted) else None
+    return {
+        "residual": acted.name, "unit": acted.unit, "z_before": acted.z,
+        "effect": best.effect.name if accepted else "unexplained",
+        "scenario_key": best.effect.key if accepted else None,
+        "magnitude": best.magnitude if accepted else None,
+        "magnitude_unit": best.effect.unit if accepted else None,
+        "residual_before": acted.value, "uncertainty_before": acted.uncertainty,
+        "residual_after": after.value if after is not None else acted.value,
+        "uncertainty_after": after.uncertainty if after is not None else acted.uncertainty,
+        "at_noise_level_after": bool(after.at_noise_level) if after is not None else bool(acted.at_noise_level),
+        "fraction_explained": best.fraction if (best is not None and accepted) else
+        (max(0.0, best.fraction) if best is not None else 0.0),
+        "best_candidate": best.summary() if best is not None else None,
+        "candidates": [c.summary() for c in candidates],
+    }
+
+
+def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = MAX_ROUNDS,
+             log=lambda message: None) -> LoopResult:
+    """The whole loop on one recording (module docstring). ``log`` receives progress lines."""
+    measured = measure(rec)
+    log(f"navigated the recording: {measured.nav}")
+    base_twin = tw.fit_twin(rec, measured.signature, measured.solution)
+    nav_unc = nav_uncertainty(base_twin, measured)
+    before = simulate_side(base_twin, measured, True)
+    current_twin, current_side = base_twin, before
+    current = compare(measured, before, nav_unc)
+    first = dict(current)
+    attributions, acted_names, used = [], set(), set()
+    ctx = fx.context(rec, base_twin.doc, measured.signature, before.signature)
+    for _ in range(max_rounds):
+        ranked = sorted((r for r in current.values()
+                         if r.name not in acted_names and r.name not in DERIVED and not r.name.startswith("nav_")
+                         and r.z > NOISE_LEVEL),
+                        key=lambda r: -r.z)
+        if not ranked:
+            break
+        acted = ranked[0]
+        acted_names.add(acted.name)
+        ctx = fx.context(rec, current_twin.doc, measured.signature, current_side.signature)
+        candidates = [e for e in library if acted.name in e.moves and e.name not in used and fx.applicable(e, ctx)]
+        fits = [fit_effect(e, current_twin, measured, current, acted.name, ctx, nav_unc) for e in candidates]
+        ranked_fits = sorted(fits, key=lambda f: (f.acceptable, f.fraction, -f.q_after), reverse=True)
+        best = ranked_fits[0] if ranked_fits else None
+        accepted = best is not None and best.acceptable
+        attributions.append(_record(acted, best, accepted, fits))
+        log(f"{acted.name} (z = {acted.z:.1f}): " + (f"{best.effect.name} = {best.magnitude:.4g} {best.effect.unit}, "
+                                                     f"explains {best.fraction:.0%}" if accepted else "unexplained"))
+        if accepted:
+            used.add(best.effect.name)
+            current_twin = tw.match_noise(current_twin.with_changes(best.effect.changes(best.magnitude, ctx)))
+            current_side = simulate_side(current_twin, measured, True)
+            current = compare(measured, current_side, nav_unc)
+    return LoopResult(measured, base_twin, current_twin, before, current_side, first, current, attributions,
+                      nav_unc, ctx)

@@ -1,0 +1,179 @@
+"""The effect library: what a twin may lack, each one a simulator parameter a user's scenario can switch on.
+
+Every effect names the scenario key it sets (so a fitted magnitude can be pasted into a scenario), its unit,
+the residuals it moves (:mod:`gaitsim.loop.residuals`, plus the navigation residuals ``nav_length_ratio`` and
+``nav_heading_drift``), the range searched, and a closed-form first guess where one exists. Magnitudes are
+fitted by :mod:`gaitsim.loop.attribution` with a 1-D search that re-simulates the twin (sensor-side effects only
+re-run the sensor model on the cached walk).
+
+| effect | scenario key | unit | moves |
+|---|---|---|---|
+| stance_creep | [micromotion] creep_velocity_mps (forward) | m/s | stance_velocity, nav_length_ratio |
+| stance_roll | [micromotion] stance_roll_rate_dps | deg/s | stance_gyro, stance_acc_spread, stance_duration |
+| impact_ringing | [impact] ringing_accel_mps2 (ringing_hz from the residual spectrum) | m/s^2 | onset_hf, hf40, hf80, acc_peak, stance_acc_spread, stance_duration |
+| bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, profiles |
+| accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
+| mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
+| accel_scale | [sensor] accel_misalignment = (1 + s) I | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
+| g_sensitivity | [sensor] gyro_g_sensitivity = k I | deg/s/(m/s^2) | nav_heading_drift |
+| saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
+
+Roll and pitch of the sensor on the foot are part of the twin's mount fit (gravity at rest), so the library's
+misalignment is the remaining yaw. A fitted magnitude equal to the twin's current value means "no change".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from nav.recording import Recording
+
+from . import residuals
+
+ACC_PROFILES = ("profile_acc_x", "profile_acc_y", "profile_acc_z")
+GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
+RINGING_BAND_HZ = 20.0  # lowest ringing frequency searched in the residual spectrum
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One entry of the library.
+
+    Attributes
+    ----------
+    name, description : what it is.
+    key : the scenario key(s) it sets, as "[section] key".
+    unit : unit of the magnitude.
+    moves : residual names it changes (the loop tries it on these).
+    bounds : (low, high) searched magnitude range, in ``unit`` (the recording's rate may narrow it).
+    log_scale : search on a logarithmic scale (bounds must then be > 0).
+    changes : (magnitude, context) -> {section: {key: value}} merged into the twin's scenario document.
+    first_guess : (residuals, context) -> magnitude or None, a closed-form estimate from the residuals.
+    """
+
+    name: str
+    description: str
+    key: str
+    unit: str
+    moves: tuple
+    bounds: tuple
+    changes: Callable
+    first_guess: Callable = lambda res, ctx: None
+    log_scale: bool = False
+
+    def search_bounds(self, context: dict) -> tuple[float, float]:
+        """Bounds for this recording: a bandwidth stays below 0.45 times the sample rate; a clipping level
+        cannot lie below the largest accelerometer reading the recording holds (searched up to 1.5 times it)."""
+        low, high = self.bounds
+        if self.name == "bandwidth":
+            high = min(high, 0.45 * context["rate_hz"])
+        if self.name == "saturation":
+            low = max(low, 0.98 * context["largest_acc_component"])
+            high = min(high, 1.5 * context["largest_acc_component"])
+        return low, high
+
+
+def _value(res: dict, name: str, side: str = "value") -> float | None:
+    r = res.get(name)
+    return None if r is None else getattr(r, side)
+
+
+def _roll_guess(res, ctx):
+    m, w = _value(res, "stance_gyro", "measured"), _value(res, "stance_gyro", "twin")
+    if m is None:
+        return None
+    return ctx["stance_roll_rate_dps"] + 2.0 * math.sqrt(max(m * m - w * w, 0.0))
+
+
+def _creep_guess(res, ctx):
+    v = _value(res, "stance_velocity")
+    return None if v is None else ctx["creep_mps"] + v
+
+
+def _scale_guess(res, ctx):
+    m, w = _value(res, "rest_acc_norm", "measured"), _value(res, "rest_acc_norm", "twin")
+    return None if m is None else 100.0 * (m / w - 1.0)
+
+
+def _sensor(**items) -> dict:
+    return {"sensor": items}
+
+
+LIBRARY: tuple[Effect, ...] = (
+    Effect("stance_creep", "forward creep of the foot during foot flat (stance micro-motion magnitude)",
+           "[micromotion] creep_velocity_mps", "m/s", ("stance_velocity", "nav_length_ratio"), (-0.02, 0.06),
+           lambda m, ctx: {"micromotion": {"creep_velocity_mps": [m, 0.0, 0.0]}}, _creep_guess),
+    Effect("stance_roll", "roll-over of the foot about the heel-toe axis during stance (micro-rotation)",
+           "[micromotion] stance_roll_rate_dps", "deg/s",
+           ("stance_gyro", "stance_acc_spread", "stance_duration"), (0.0, 60.0),
+           lambda m, ctx: {"micromotion": {"stance_roll_rate_dps": m}}, _roll_guess),
+    Effect("impact_ringing", "damped vertical ringing of foot and mount after heel strike and forefoot slap",
+           "[impact] ringing_accel_mps2 (ringing_hz from the residual spectrum)", "m/s^2",
+           ("onset_hf", "hf40", "hf80", "acc_peak", "stance_acc_spread", "stance_duration"),
+           (0.0, 300.0),
+           lambda m, ctx: {"impact": {"ringing_hz": ctx["ringing_hz"], "ringing_accel_mps2": m}}),
+    Effect("bandwidth", "low-pass of the sensor (Butterworth, same cutoff on both sensors)",
+           "[sensor] accel_bandwidth, gyro_bandwidth", "Hz",
+           ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag") + ACC_PROFILES + GYR_PROFILES, (8.0, 400.0),
+           lambda m, ctx: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"]), log_scale=True),
+    Effect("accel_gyro_skew", "time skew between accelerometer and gyro sampling (> 0: gyro later)",
+           "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES, (-20.0, 20.0),
+           lambda m, ctx: _sensor(accel_gyro_skew=[m, "ms"]),
+           lambda res, ctx: None if _value(res, "acc_gyro_lag") is None else -_value(res, "acc_gyro_lag")),
+    Effect("mount_yaw", "yaw of the sensor axes on the foot (misalignment left after the gravity-based tilt)",
+           "[sensor] mounting_misalignment (yaw)", "deg", ("swing_axis_yaw", "profile_gyr_x", "profile_acc_y"),
+           (-30.0, 30.0), lambda m, ctx: _sensor(mounting_misalignment=[[*ctx["mount_roll_pitch_deg"], m], "deg"]),
+           lambda res, ctx: _value(res, "swing_axis_yaw")),
+    Effect("accel_scale", "accelerometer scale factor error, equal on the three axes",
+           "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES, (-5.0, 5.0),
+           lambda m, ctx: _sensor(accel_misalignment=[(np.eye(3) * (1.0 + m / 100.0)).tolist(), "1"]),
+           _scale_guess),
+    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I)",
+           "[sensor] gyro_g_sensitivity", "deg/s/(m/s^2)", ("nav_heading_drift",), (-0.02, 0.02),
+           lambda m, ctx: _sensor(gyro_g_sensitivity=[(np.eye(3) * m).tolist(), "deg/s/(m/s^2)"])),
+    Effect("saturation", "accelerometer range limit (clipping)", "[sensor] accel_range", "m/s^2",
+           ("acc_peak", "hf40", "hf80", "onset_hf") + ACC_PROFILES, (20.0, 400.0),
+           lambda m, ctx: _sensor(accel_range=[m, "m/s^2"]),
+           lambda res, ctx: ctx["largest_acc_component"] if ctx["largest_acc_component"] < 350 else None,
+           log_scale=True),
+)
+BY_NAME = {e.name: e for e in LIBRARY}
+
+
+def ringing_frequency(measured: residuals.Signature, twin: residuals.Signature) -> float:
+    """Frequency (Hz) where the measured |a| spectrum most exceeds the twin's, above RINGING_BAND_HZ and below
+    0.45 times the sample rate (5-bin smoothing); NaN when the band is empty."""
+    f_m, p_m = measured.spectrum
+    f_t, p_t = twin.spectrum
+    p_t = np.interp(f_m, f_t, p_t)
+    kernel = np.ones(5) / 5
+    excess = np.convolve(p_m, kernel, "same") - np.convolve(p_t, kernel, "same")
+    band = (f_m >= RINGING_BAND_HZ) & (f_m <= 0.45 * measured.rate_hz)
+    if not band.any():
+        return math.nan
+    return float(f_m[band][np.argmax(excess[band])])
+
+
+def context(rec: Recording, twin_doc: dict, measured: residuals.Signature, twin_sig: residuals.Signature) -> dict:
+    """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
+    and the twin's current creep, roll rate and sensor roll/pitch on the foot (deg)."""
+    micro = twin_doc.get("micromotion", {})
+    mounting = twin_doc.get("sensor", {}).get("mounting_misalignment", [[0.0, 0.0, 0.0], "deg"])[0]
+    return {"rate_hz": measured.rate_hz,
+            "ringing_hz": round(ringing_frequency(measured, twin_sig), 1),
+            "largest_acc_component": float(np.max(np.abs(rec.acc))),
+            "creep_mps": float(micro.get("creep_velocity_mps", [0.01, 0.0, 0.0])[0]),
+            "stance_roll_rate_dps": float(micro.get("stance_roll_rate_dps", 0.0)),
+            "mount_roll_pitch_deg": [float(mounting[0]), float(mounting[1])]}
+
+
+def applicable(effect: Effect, ctx: dict) -> bool:
+    """False when the recording cannot show the effect (ringing without a usable spectrum band)."""
+    if effect.name == "impact_ringing":
+        return math.isfinite(ctx["ringing_hz"]) and ctx["ringing_hz"] >= 5
+    low, high = effect.search_bounds(ctx)
+    return high > low

@@ -1,0 +1,164 @@
+"""Write one loop result: ``attribution.json``, ``report.md`` and figures (``*.png``) into a folder.
+
+``attribution.json`` holds, per residual acted on, the effect named (or ``"unexplained"``), the scenario key,
+the fitted magnitude and unit, the residual before and after with uncertainties, whether it is at the noise
+level after, the fraction explained and every candidate tried; then the predicted-versus-measured navigation
+metrics before and after, all residuals before and after, and the fitted twin (its scenario document, which a
+user can save as TOML and simulate).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import attribution as att  # noqa: E402
+from .residuals import CHANNELS, NOISE_LEVEL  # noqa: E402
+
+
+def _clean(o):
+    """JSON-ready copy: numpy to Python, non-finite floats to None."""
+    if isinstance(o, dict):
+        return {str(k): _clean(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_clean(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return _clean(o.tolist())
+    if isinstance(o, (np.floating, float)):
+        return float(o) if math.isfinite(o) else None
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, np.bool_):
+        return bool(o)
+    return o
+
+
+def attribution_document(result: att.LoopResult, label: str) -> dict:
+    """The content of ``attribution.json`` (module docstring)."""
+    return _clean({
+        "recording": label,
+        "noise_level": f"|residual| <= {NOISE_LEVEL} x uncertainty",
+        "explained_threshold": att.EXPLAINED_FRACTION,
+        "attributions": result.attributions,
+        "navigation": result.navigation_summary(),
+        "navigation_uncertainty": result.nav_uncertainty,
+        "residuals_before": {k: r.as_dict() for k, r in result.residuals_before.items()},
+        "residuals_after": {k: r.as_dict() for k, r in result.residuals_after.items()},
+        "effect_context": result.context,
+        "twin_before": {"scenario": result.twin_before.doc, "fit_notes": result.twin_before.notes},
+        "twin_after": {"scenario": result.twin_after.doc},
+    })
+
+
+def _fmt(x, digits: int = 4) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "-"
+    if isinstance(x, str):
+        return x
+    return f"{x:.{digits}g}"
+
+
+def _figures(result: att.LoopResult, folder: Path) -> list[str]:
+    names = []
+    phase = np.linspace(0, 100, len(result.measured.signature.profiles[CHANNELS[0]].mean), endpoint=False)
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6.5), sharex=True)
+    for ax, c in zip(axes.ravel(), CHANNELS):
+        for side, label, style in ((result.measured, "recording", "k-"), (result.before, "twin before", "C0--"),
+                                   (result.after, "twin after", "C3-")):
+            p = side.signature.profiles[c]
+            ax.plot(phase, p.mean, style, lw=1.2, label=label)
+            if side is result.measured:
+                ax.fill_between(phase, p.mean - 2 * p.se, p.mean + 2 * p.se, color="0.8")
+        ax.set_title(c + (" (m/s^2)" if c.startswith("acc") else " (deg/s)"))
+        ax.set_xlabel("gait phase from stance onset (%)")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(folder / "profiles.png", dpi=90)
+    plt.close(fig)
+    names.append("profiles.png")
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for side, label, style in ((result.measured, "recording", "k-"), (result.before, "twin before", "C0--"),
+                               (result.after, "twin after", "C3-")):
+        f, p = side.signature.spectrum
+        ax.semilogy(f[1:], np.maximum(p[1:], 1e-12), style, lw=1, label=label)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("share of |a| power per bin")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(folder / "spectrum.png", dpi=90)
+    plt.close(fig)
+    names.append("spectrum.png")
+
+    keys = sorted(result.residuals_before, key=lambda k: -np.nan_to_num(result.residuals_before[k].z))
+    z_before = [np.nan_to_num(result.residuals_before[k].z) for k in keys]
+    z_after = [np.nan_to_num(result.residuals_after[k].z) if k in result.residuals_after else 0.0 for k in keys]
+    fig, ax = plt.subplots(figsize=(8, 0.28 * len(keys) + 1.2))
+    y = np.arange(len(keys))
+    ax.barh(y + 0.2, z_before, 0.4, label="before", color="C0")
+    ax.barh(y - 0.2, z_after, 0.4, label="after", color="C3")
+    ax.axvline(NOISE_LEVEL, color="k", ls=":", lw=1)
+    ax.set_yticks(y, keys, fontsize=8)
+    ax.set_xscale("symlog", linthresh=1)
+    ax.invert_yaxis()
+    ax.set_xlabel("|residual| / uncertainty")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(folder / "residuals.png", dpi=90)
+    plt.close(fig)
+    names.append("residuals.png")
+    return names
+
+
+def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
+    """The human report of one loop result."""
+    lines = [f"# Sim-to-real loop: {label}", "",
+             f"Twin: {result.twin_before.notes.get('path', '')}; track from the "
+             f"{result.twin_before.notes.get('track', '')}. Residual = recording - twin; z = |residual| / "
+             f"uncertainty; at the noise level when z <= {NOISE_LEVEL}. An effect is named when it explains at "
+             f"least {att.EXPLAINED_FRACTION:.0%} of the residual acted on and lowers the total misfit.", "",
+             "## Attribution", "",
+             "| residual | z before | effect | magnitude | before | after | uncertainty after | explained |",
+             "|---|---|---|---|---|---|---|---|"]
+    for a in result.attributions:
+        mag = f"{_fmt(a['magnitude'])} {a['magnitude_unit']}" if a["magnitude"] is not None else "-"
+        best = a.get("best_candidate") or {}
+        effect = a["effect"] if a["effect"] != "unexplained" else (
+            f"unexplained (best: {best.get('effect', '-')}, {best.get('fraction_explained', 0):.0%})")
+        lines.append(f"| {a['residual']} ({a['unit']}) | {_fmt(a['z_before'], 3)} | {effect} | {mag} | "
+                     f"{_fmt(a['residual_before'])} | {_fmt(a['residual_after'])} | {_fmt(a['uncertainty_after'])} | "
+                     f"{a['fraction_explained']:.0%} |")
+    if not result.attributions:
+        lines.append("| (no residual above the noise level) | | | | | | | |")
+    lines += ["", "## Navigation: predicted (twin) versus measured", "",
+              "| metric | measured | twin before | twin after | discrepancy before | discrepancy after |",
+              "|---|---|---|---|---|---|"]
+    for key, v in result.navigation_summary().items():
+        lines.append(f"| {key} ({v['unit']}) | {_fmt(v['measured'])} | {_fmt(v['twin_before'])} | "
+                     f"{_fmt(v['twin_after'])} | {_fmt(v['discrepancy_before'])} | {_fmt(v['discrepancy_after'])} |")
+    lines += ["", "## All residuals", "", "| residual | unit | recording | twin before | residual before | z before "
+              "| twin after | residual after | z after |", "|---|---|---|---|---|---|---|---|---|"]
+    for key in sorted(result.residuals_before, key=lambda k: -np.nan_to_num(result.residuals_before[k].z)):
+        b = result.residuals_before[key]
+        a = result.residuals_after.get(key)
+        lines.append(f"| {key} | {b.unit} | {_fmt(b.measured)} | {_fmt(b.twin)} | {_fmt(b.value)} | {_fmt(b.z, 3)} | "
+                     f"{_fmt(a.twin) if a else '-'} | {_fmt(a.value) if a else '-'} | {_fmt(a.z, 3) if a else '-'} |")
+    lines += ["", "## Figures", ""] + [f"![{name}]({name})" for name in figures] + [""]
+    return "\n".join(lines)
+
+
+def write_result(result: att.LoopResult, folder: Path, label: str) -> dict:
+    """Write attribution.json, report.md and the figures into ``folder`` (which must exist); returns the
+    attribution document."""
+    doc = attribution_document(result, label)
+    (folder / "attribution.json").write_text(json.dumps(doc, indent=1))
+    figures = _figures(result, folder)
+    (folder / "report.md").write_text(markdown(result, label, figures))
+    return doc

@@ -1,0 +1,62 @@
+"""The twin fit recovers the gait and mount of a simulated recording that declares neither."""
+
+import math
+
+import pytest
+
+import nav
+from gaitsim.loop import residuals, twin
+from gaitsim.scenario import scenario_from_dict
+from gaitsim.truth import simulate_walk
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    doc = {"path": {"kind": "polyline", "waypoints_m": [[0, 0], [10, 0], [10, 6]], "corner_radius_m": 1.0},
+           "sampling": {"rate_hz": 200.0}, "sensor": {"preset": "vn200", "withhold": True,
+                      "mounting_misalignment": [[12.0, -8.0, 0.0], "deg"]},
+           "gait": {"cadence_steps_per_min": 100.0, "stride_length_m": 1.25, "pitch_toe_off_deg": 55.0},
+           }
+    rec = twin.as_measured(simulate_walk(scenario_from_dict(doc), seed=5), reference_rate_hz=100.0)
+    sig = residuals.signature(rec.t, rec.acc, rec.gyr, rec.reference.t, rec.reference.pos)
+    sol = nav.navigate(rec, twin.NAV_OPTIONS)
+    return rec, twin.fit_twin(rec, sig, sol)
+
+
+def test_measured_recording_carries_no_gait_or_sensor_parameters(fitted):
+    rec, _ = fitted
+    assert rec.truth is None and rec.events is None
+    assert set(rec.meta) == {"sampling", "reference"}
+
+
+def test_cadence_stride_length_and_mount_tilt_are_recovered(fitted):
+    _, fit = fitted
+    gait = fit.doc["gait"]
+    assert gait["cadence_steps_per_min"] == pytest.approx(100.0, rel=0.02)
+    assert gait["stride_length_m"] == pytest.approx(1.25, rel=0.03)
+    roll, pitch, _ = fit.doc["sensor"]["mounting_misalignment"][0]
+    assert roll == pytest.approx(12.0, abs=0.5) and pitch == pytest.approx(-8.0, abs=0.5)
+
+
+def test_the_turn_becomes_a_polyline_of_the_walked_length(fitted):
+    _, fit = fitted
+    assert fit.doc["path"]["kind"] == "polyline"
+    pts = fit.doc["path"]["waypoints_m"]
+    length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:]))
+    assert length == pytest.approx(16.0, rel=0.1)
+
+
+def test_matched_statistics_agree(fitted):
+    _, fit = fitted
+    m, t = fit.notes["measured_statistics"], fit.notes["twin_statistics"]
+    assert t["period_s"] == pytest.approx(m["period_s"], rel=0.02)
+    assert t["stance_fraction"] == pytest.approx(m["stance_fraction"], abs=0.03)
+    assert t["pitch_high_deg"] == pytest.approx(m["pitch_high_deg"], rel=0.05)
+
+
+def test_noise_is_matched_to_the_static_part(fitted):
+    rec, fit = fitted
+    sim = twin.simulate(fit)
+    q0, q1 = 20, 200  # the first second is standing in both
+    ratio = sim.gyr[q0:q1].std(0) / rec.gyr[q0:q1].std(0)
+    assert ratio == pytest.approx([1, 1, 1], rel=0.25)
