@@ -116,6 +116,20 @@ class MicroMotionParams:
         roll rate is +rate at foot flat, falls linearly through zero at mid foot-flat to -rate at heel off, and
         rises from / returns to zero over the heel rocker / push-off (C4). Rolling about the contact axis moves
         neither contact point. Core-stance mean |rate| is rate/2. Default 0 (a still foot flat).
+    stance_rotation_dps : deg/s, (roll, pitch, yaw) rates of a sustained rotation of the foot during foot flat:
+        each rate ramps up (C4, over ``creep_ramp_s``) after foot flat, holds, and ramps down to zero at heel
+        off, so the foot turns by rate * (foot flat - creep_ramp_s) during the stance; the angle is held through
+        the push-off and returned over the swing. The rates are ZYX Euler-angle rates on top of the gait's
+        angles, equal to the body rates about the foot's x (toes), y (left), z (up) axes to first order in the
+        (few-degree) stance angles. Measured foot IMUs show it in every recording (gaitmap, x-io, UCR:
+        core-stance rates of 2-6 deg/s per axis, signs mirrored in roll and yaw between left and right foot:
+        pronation, heel rise, internal rotation). Default (0, 0, 0).
+    stance_rotation_pivot_frac : (pitch, yaw) pivots of the sustained rotation, each a fraction of the way from
+        the heel contact (0) to the toe contact (1): the foot yaws about the vertical axis through the yaw pivot,
+        then pitches about the lateral axis through the pitch pivot; roll turns about the heel-toe line and
+        moves no contact point. Default (1, 0): the heel rises about the forefoot and the foot turns about
+        the heel, as gaitmap's Vicon markers show (the heel-side sensor moves up at pitch rate x 0.20-0.23 m
+        and sideways at under 0.006 m/s while the foot yaws at 6 deg/s).
     """
 
     enabled: bool = True
@@ -126,6 +140,8 @@ class MicroMotionParams:
     heel_off_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.005)
     heel_off_duration_s: float = 0.10
     stance_roll_rate_dps: float = 0.0
+    stance_rotation_dps: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    stance_rotation_pivot_frac: tuple[float, float] = (1.0, 0.0)
 
 
 @dataclass(frozen=True)

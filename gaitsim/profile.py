@@ -6,8 +6,9 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 
 - Heel rocker [t_ic, t_ff]: rotation about the heel contact (fixed but for heel-strike compression and stance
   micro-motion). Its last ``slap_duration_s`` stop the forefoot: pitch rate ``slap_rate * (1 - smoothstep)``.
-- Foot flat [t_ff, t_ho]: still, but for micro-motion and the optional stance roll-over (roll about the
-  heel-toe axis, which moves neither contact point).
+- Foot flat [t_ff, t_ho]: still, but for micro-motion, the optional stance roll-over (roll about the
+  heel-toe axis, which moves neither contact point) and the optional sustained stance rotation (about a pivot
+  on the heel-toe line; its angles are held through the push-off and returned over the swing).
 - Push-off [t_ho, t_to]: rotation about the toe contact, whose position follows the micro-motion.
 - Swing [t_to, t_ic']: degree-9 Hermite of the heel point matching position and derivatives 1..4 at both ends,
   plus a C4 lift (height) and sideways excursion; yaw turns to the next stance with a C4 smoothstep.
@@ -16,6 +17,8 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 from __future__ import annotations
 
 import numpy as np
+
+from nav import quaternion as quat
 
 from . import smooth
 from .gait import StancePlan, Walk
@@ -89,6 +92,7 @@ class FootTrajectory:
                                                   mm.heel_off_velocity_mps[a]),
                     ]
             self.contact.append(axes)
+        self.rotation = self._build_stance_rotation()
         self.heel_base = [
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
@@ -115,10 +119,50 @@ class FootTrajectory:
                        [edge, -rate, -2 * rate / flat, 0, 0], [0, 0, 0, 0, 0]]
         return smooth.hermite(np.array(knots), np.array(stacks, float))
 
+    def _build_stance_rotation(self) -> dict | None:
+        """Sustained stance rotation per walking stance k: (roll, pitch, yaw) angle pieces (rad) of the rate
+        plateau inside foot flat, and the angles (3,) rad reached at heel off."""
+        plan, mm = self.plan, self.walk.micro
+        rates = np.deg2rad(np.asarray(mm.stance_rotation_dps, float))
+        if not (mm.enabled and np.any(rates) and plan.walking.any()):
+            return None
+        ramp = mm.creep_ramp_s
+        return {int(k): ([smooth.plateau_displacement(plan.t_ff[k] + ramp, plan.t_ho[k] - ramp, ramp, r) for r in rates],
+                         rates * (plan.t_ho[k] - plan.t_ff[k] - ramp))
+                for k in np.flatnonzero(plan.walking)}
+
+    def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) stacks of stance k's sustained-rotation angles (roll, pitch, yaw), rad: zero before its foot
+        flat, rising through it, held through the push-off, returned to zero over the following swing."""
+        out = np.zeros((3, smooth.NDER, t.size))
+        if self.rotation is None or k not in self.rotation:
+            return out
+        pieces, held = self.rotation[k]
+        swing = self.plan.t_ic[k + 1] - self.plan.t_to[k]
+        for a in range(3):
+            out[a] = pieces[a].stack(t) + smooth.smoothstep_stack(t, self.plan.t_to[k], swing, 0.0, -held[a])
+        return out
+
     # -- pieces ---------------------------------------------------------------------------------------------
 
+    @staticmethod
+    def _x_axis(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+        """(3, 5, N) stack of the foot's x axis in the world, (cos p cos y, cos p sin y, -sin p), from the
+        stacks of yaw and pitch (roll does not move it)."""
+        cos_y, sin_y = smooth.compose_trig(yaw)
+        cos_p, sin_p = smooth.compose_trig(pitch)
+        return np.stack([smooth.product(cos_p, cos_y), smooth.product(cos_p, sin_y), -sin_p])
+
+    def _held_angles(self, k: int) -> np.ndarray:
+        """(roll, pitch, yaw) rad of stance k's sustained rotation from heel off to toe off (zero without it)."""
+        return self.rotation[k][1] if self.rotation is not None and k in self.rotation else np.zeros(3)
+
     def _toe_vector(self, k: int) -> np.ndarray:
-        return self.toe_length * np.array([np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k]), 0.0])
+        """Heel-to-toe contact vector (m, world) at stance k's heel off."""
+        _, pitch, yaw = self._held_angles(k)
+        c = np.cos(pitch)
+        return self.toe_length * np.array([c * np.cos(self.foot_yaw[k] + yaw), c * np.sin(self.foot_yaw[k] + yaw),
+                                           -np.sin(pitch)])
 
     def _contact_stack(self, k: int, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement."""
@@ -129,20 +173,33 @@ class FootTrajectory:
         return np.einsum("ij,jdn->idn", self.frames[k], local)
 
     def _stance_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) heel point during [t_ic, t_ho] of stance k."""
+        """(3, 5, N) heel point during [t_ic, t_ho] of stance k.
+
+        A sustained stance rotation first yaws the heel-toe line about the yaw pivot (a fraction f_y of the way
+        to the toe), turning its horizontal direction from u0 to u, then pitches it about the pitch pivot (f_p):
+        heel += L (f_y (u0 - u) + f_p (u - x_axis)), L the heel-toe length."""
         out = self._contact_stack(k, t)
         out[:, 0] += self.heel_base[k][:, None]
+        if self.rotation is not None and k in self.rotation:
+            _, pitch, yaw = self._rotation_of(k, t)
+            yaw[0] += self.foot_yaw[k]
+            u = self._x_axis(yaw, np.zeros_like(pitch))
+            u0 = np.zeros((3, smooth.NDER, 1))
+            u0[:, 0, 0] = np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k]), 0.0
+            f_pitch, f_yaw = self.walk.micro.stance_rotation_pivot_frac
+            out += self.toe_length * (f_yaw * (u0 - u) + f_pitch * (u - self._x_axis(yaw, pitch)))
         return out
 
     def _push_off_heel(self, k: int, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) heel point during [t_ho, t_to]: rotation about the (micro-moving) toe contact."""
         out = self._contact_stack(k, t)
         out[:, 0] -= self._contact_stack(k, np.array([self.plan.t_ho[k]]))[:, 0, :]
-        cos_s, sin_s = smooth.compose_trig(self.pitch.stack(t))
-        cy, sy = np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k])
-        out[0] -= self.toe_length * cy * cos_s
-        out[1] -= self.toe_length * sy * cos_s
-        out[2] += self.toe_length * sin_s
+        _, held_pitch, held_yaw = self._held_angles(k)
+        pitch = self.pitch.stack(t)
+        pitch[0] += held_pitch
+        yaw = np.zeros_like(pitch)
+        yaw[0] = self.foot_yaw[k] + held_yaw
+        out -= self.toe_length * self._x_axis(yaw, pitch)
         out[:, 0] += self._toe_at_heel_off[k][:, None]
         return out
 
@@ -198,13 +255,27 @@ class FootTrajectory:
             roll += smooth.lift(t, plan.t_to[k], dur, np.deg2rad(g.swing_roll_deg))
         if self.stance_roll is not None:
             roll += self.stance_roll.stack(t)
+        for k in (self.rotation or {}):
+            d_roll, d_pitch, d_yaw = self._rotation_of(k, t)
+            roll += d_roll
+            pitch += d_pitch
+            yaw += d_yaw
         return np.stack([yaw, pitch, roll])
 
     def joints(self, t: np.ndarray) -> np.ndarray:
         """(6, 5, N) derivative stacks of the joints (x, y, z, yaw, pitch, roll) at times ``t`` (s)."""
         return np.concatenate([self.heel(t), self.angles(t)])
 
-    def stance_displacement(self) -> np.ndarray:
-        """(n+1, 3) m: exact heel (= IMU, the attitude being equal at both ends) displacement over [t_ff, t_ho]."""
+    def point(self, t: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:
+        """(N, 3) m: world position at times ``t`` (s) of the foot point ``lever_arm`` (m, foot frame, from the
+        heel contact)."""
+        t = np.asarray(t, float)
+        yaw, pitch, roll = self.angles(t)[:, 0]
+        rotation = quat.to_matrix(quat.from_euler_zyx(yaw, pitch, roll))
+        return self.heel(t)[:, 0, :].T + rotation @ np.asarray(lever_arm, float)
+
+    def stance_displacement(self, lever_arm: np.ndarray = np.zeros(3)) -> np.ndarray:
+        """(n+1, 3) m: exact displacement over foot flat [t_ff, t_ho] of the foot point ``lever_arm`` (m, foot
+        frame; the IMU site's for the truth)."""
         p = self.plan
-        return self.heel(p.t_ho)[:, 0, :].T - self.heel(p.t_ff)[:, 0, :].T
+        return self.point(p.t_ho, lever_arm) - self.point(p.t_ff, lever_arm)

@@ -147,6 +147,14 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
              f"must be shorter than the heel rocker and push-off ({min(rocker, push):.3f} s)")
     _require(mm.heel_off_duration_s / 2 < push, f"{where} [micromotion]", "heel_off_duration_s",
              mm.heel_off_duration_s, "half of it must fit into the push-off")
+    _require(all(0.0 <= f <= 1.0 for f in mm.stance_rotation_pivot_frac), f"{where} [micromotion]",
+             "stance_rotation_pivot_frac", list(mm.stance_rotation_pivot_frac),
+             "both (pitch, yaw) pivots must lie in [0, 1] (0 = heel contact, 1 = toe contact)")
+    flat = g.foot_flat_frac * g.cycle_s
+    if any(mm.stance_rotation_dps):
+        _require(2 * mm.creep_ramp_s < flat, f"{where} [micromotion]", "stance_rotation_dps",
+                 list(mm.stance_rotation_dps), f"needs a foot flat ({flat:.3f} s) longer than two creep ramps "
+                                               f"(2 x creep_ramp_s = {2 * mm.creep_ramp_s:.3f} s)")
 
 
 def build_path(table: dict, gait: GaitParams, where: str):

@@ -74,7 +74,7 @@ def simulate_truth(scenario: Scenario, gait_rng: np.random.Generator) -> tuple[T
     truth = Truth(t=t, pos=s.pos, vel=s.vel, quat=s.quat, gyr=s.gyr, acc=s.acc, dv=dv, dth=dth,
                   stance=stance_labels(t, plan))
     events = Events(t_ic=plan.t_ic, t_ff=plan.t_ff, t_ho=plan.t_ho, t_to=plan.t_to,
-                    stance_displacement=traj.stance_displacement())
+                    stance_displacement=traj.stance_displacement(foot.lever_arm))
     return truth, events, traj
 
 

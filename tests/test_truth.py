@@ -84,7 +84,8 @@ def test_mujoco_sensors_equal_rigid_body_formulas():
 
 
 def test_joint_trajectories_are_c4_at_every_knot():
-    scen = short_walk(micromotion={"stance_roll_rate_dps": 20.0},
+    scen = short_walk(micromotion={"stance_roll_rate_dps": 20.0, "stance_rotation_dps": [4.0, 3.0, -6.0],
+                                   "stance_rotation_pivot_frac": [0.7, 0.2]},
                       impact={"ringing_hz": 60.0, "ringing_damping": 0.15, "ringing_accel_mps2": 15.0},
                       path={"kind": "arc", "radius_m": 5.0, "turn_deg": 80.0, "yaw_deg": 0.0})
     plan = plan_stances(scen.walk, run_generators(5)[0])
@@ -94,6 +95,7 @@ def test_joint_trajectories_are_c4_at_every_knot():
         plan.t_ic, plan.t_ff, plan.t_ho, plan.t_to, plan.t_ff - imp.slap_duration_s,
         plan.t_ic + imp.heel_strike_duration_s, plan.t_ff - mm.creep_ramp_s, plan.t_ho + mm.creep_ramp_s,
         plan.t_ff + mm.settle_duration_s, plan.t_ho - mm.heel_off_duration_s / 2, plan.t_ho + mm.heel_off_duration_s / 2,
+        plan.t_ff + mm.creep_ramp_s, plan.t_ho - mm.creep_ramp_s,
     ])
     ring = smooth.Ringing(0.0, 60.0, 0.15, 15.0)
     events = np.concatenate([plan.t_ic[1:], plan.t_ff[1:]])
@@ -248,3 +250,76 @@ def test_mount_rotation_rotates_the_sensor_axes():
     s = foot.sample(np.zeros((1, 6)), np.zeros((1, 6)), np.zeros((1, 6)))
     c = Q.to_matrix(Q.from_euler_zyx(0.0, np.deg2rad(rpy[1]), np.deg2rad(rpy[0])))
     np.testing.assert_allclose(s.acc[0], c.T @ [0, 0, G], atol=1e-12)
+
+
+QUIET_STANCE = {"creep_velocity_mps": [0.0, 0.0, 0.0], "settle_velocity_mps": [0.0, 0.0, 0.0],
+                "heel_off_velocity_mps": [0.0, 0.0, 0.0]}
+
+
+@pytest.mark.parametrize("axis, pivot", [(0, None), (1, "pitch"), (2, "yaw")])
+def test_stance_rotation_turns_the_foot_at_its_rate_about_its_pivot(axis, pivot):
+    """One axis at a time, the body rate in the held part of foot flat is exactly the configured rate; the
+    pivot (toe contact for pitch, heel contact for yaw by default) does not move; the angle reached is
+    rate * (foot flat - ramp), held through the push-off, and gone by the next foot flat."""
+    rates = [0.0, 0.0, 0.0]
+    rates[axis] = 7.0
+    scen = short_walk(micromotion={**QUIET_STANCE, "stance_rotation_dps": rates}, gait={"stride_length_sd_m": 0.0})
+    foot = FootModel(scen.mount)
+    plan = plan_stances(scen.walk, run_generators(4)[0])
+    traj = FootTrajectory(scen.walk, plan, foot.toe_length)
+    mm = scen.walk.micro
+    k = 2
+    t = np.linspace(plan.t_ff[k] + mm.creep_ramp_s, plan.t_ho[k] - mm.creep_ramp_s, 200)
+    j = traj.joints(t)
+    s = foot.sample(j[:, 0].T, j[:, 1].T, j[:, 2].T)
+    expected = np.zeros(3)
+    expected[axis] = np.deg2rad(7.0)
+    np.testing.assert_allclose(s.gyr, np.broadcast_to(expected, s.gyr.shape), atol=1e-12)
+    pivots = {"pitch": [foot.toe_length, 0.0, 0.0], "yaw": [0.0, 0.0, 0.0]}
+    if pivot is not None:
+        still = traj.point(t, np.array(pivots[pivot]))
+        assert np.abs(still - still[0]).max() < 1e-12
+    held = np.deg2rad(7.0) * (plan.t_ho[k] - plan.t_ff[k] - mm.creep_ramp_s)
+    yaw_pitch_roll = traj.angles(np.array([plan.t_ho[k], plan.t_to[k] - 1e-9, plan.t_ff[k + 1]]))[:, 0]
+    offsets = yaw_pitch_roll - traj.angles(np.array([plan.t_ff[k]]))[:, 0]
+    got = offsets[{0: 2, 1: 1, 2: 0}[axis]]
+    assert got[0] == pytest.approx(held, rel=1e-9)
+    if axis != 1:  # the push-off pitch adds to the held pitch
+        assert got[1] == pytest.approx(held, rel=1e-9)
+    assert abs(got[2]) < 1e-12
+
+
+def test_stance_rotation_moves_the_imu_as_a_rigid_body_about_the_pivots():
+    """A heel-side IMU under a pitch about the toe moves up at pitch rate x distance to the toe contact, and
+    the events' stance displacement is the IMU's (attitudes differ at the two ends of foot flat)."""
+    rate = 3.0
+    scen = short_walk(micromotion={**QUIET_STANCE, "stance_rotation_dps": [0.0, rate, 0.0]},
+                      mount={"site": "heel"}, gait={"stride_length_sd_m": 0.0})
+    rec = simulate_walk(scen, seed=4)
+    tr, ev = rec.truth, rec.events
+    foot = FootModel(scen.mount)
+    k = 2
+    m = (tr.t > ev.t_ff[k] + 0.05) & (tr.t < ev.t_ho[k] - 0.05)
+    lever = foot.lever_arm - [foot.toe_length, 0.0, 0.0]  # IMU from the pivot, foot frame
+    speed = np.deg2rad(rate) * np.hypot(lever[0], lever[2])
+    assert np.linalg.norm(tr.vel[m], axis=1) == pytest.approx(np.full(m.sum(), speed), rel=0.02)
+    assert tr.vel[m, 2].mean() == pytest.approx(np.deg2rad(rate) * -lever[0], rel=0.02)
+    i0, i1 = np.searchsorted(tr.t, [ev.t_ff[k], ev.t_ho[k]])
+    assert np.linalg.norm(tr.pos[i1] - tr.pos[i0] - ev.stance_displacement[k]) < speed / scen.rate_hz * 2
+    assert ev.stance_displacement[k, 2] > 0.8 * speed * (ev.t_ho[k] - ev.t_ff[k] - 0.05)
+
+
+def test_every_joint_stack_row_is_the_derivative_of_the_row_above():
+    """Finite differences of each derivative row match the next row, with every stance feature switched on."""
+    scen = short_walk(micromotion={"stance_roll_rate_dps": 15.0, "stance_rotation_dps": [4.0, 3.0, -6.0],
+                                   "stance_rotation_pivot_frac": [0.8, 0.3]},
+                      impact={"ringing_hz": 40.0, "ringing_accel_mps2": 10.0})
+    plan = plan_stances(scen.walk, run_generators(2)[0])
+    traj = FootTrajectory(scen.walk, plan, 0.2)
+    h = 1e-5
+    t = np.linspace(0.5, plan.t_end - 0.5, 4001)
+    ahead, behind, here = traj.joints(t + h), traj.joints(t - h), traj.joints(t)
+    numeric = (ahead[:, :-1] - behind[:, :-1]) / (2 * h)
+    scale = np.abs(here[:, 1:]).max(axis=2, keepdims=True) + 1e-9
+    # central differences err by h^2/6 times the next derivative: 2e-5 of the scale at the sharp heel strike
+    assert (np.abs(numeric - here[:, 1:]) / scale).max() < 1e-4
