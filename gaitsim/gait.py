@@ -29,8 +29,11 @@ class GaitParams:
         Defaults 0.15 / 0.30 / 0.17 / 0.38: stance 62 % (anchors §7), foot flat from 15 % to 45 %.
     pitch_heel_strike_deg : deg, foot pitch at initial contact (negative: toes up). Default -20.
     pitch_rate_heel_strike_dps : deg/s, pitch rate at initial contact. Default 60 (forefoot starting down).
+    pitch_accel_heel_strike_dps2 : deg/s^2, pitch acceleration at initial contact. Default 0.
     pitch_toe_off_deg : deg, foot pitch at toe off (heel up). Default 45.
     pitch_rate_toe_off_dps : deg/s, pitch rate at toe off. Default 150.
+    pitch_accel_toe_off_dps2 : deg/s^2, pitch acceleration at toe off; measured feet reverse their push-off
+        rotation right after toe off (gaitmap: about -8000 deg/s^2), which a zero here cannot show. Default 0.
     swing_height_m : m, heel height at mid-swing. Default 0.08.
     swing_lateral_m : m, sideways excursion of the heel at mid-swing, positive to the left. Default 0.01.
     swing_roll_deg : deg, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3.
@@ -50,8 +53,10 @@ class GaitParams:
     swing_frac: float = 0.38
     pitch_heel_strike_deg: float = -20.0
     pitch_rate_heel_strike_dps: float = 60.0
+    pitch_accel_heel_strike_dps2: float = 0.0
     pitch_toe_off_deg: float = 45.0
     pitch_rate_toe_off_dps: float = 150.0
+    pitch_accel_toe_off_dps2: float = 0.0
     swing_height_m: float = 0.08
     swing_lateral_m: float = 0.01
     swing_roll_deg: float = 3.0

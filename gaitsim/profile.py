@@ -21,7 +21,7 @@ import numpy as np
 from nav import quaternion as quat
 
 from . import smooth
-from .gait import StancePlan, Walk
+from .gait import GaitParams, ImpactParams, StancePlan, Walk
 
 JOINTS = ("x", "y", "z", "yaw", "pitch", "roll")
 
@@ -29,6 +29,34 @@ JOINTS = ("x", "y", "z", "yaw", "pitch", "roll")
 def _rot_z(yaw: float) -> np.ndarray:
     c, s = np.cos(yaw), np.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams) -> smooth.Piecewise:
+    """Foot pitch (rad) of a walk: a Hermite through knots (value, rate, acceleration, 0, 0) at each stance's
+    heel strike (its drawn pitch, ``pitch_rate_heel_strike_dps``, ``pitch_accel_heel_strike_dps2``), start of
+    the forefoot slap (``slap_rate_dps``, with the angle left to stop at that rate), foot flat and heel off
+    (level and still) and toe off (its drawn pitch, ``pitch_rate_toe_off_dps``, ``pitch_accel_toe_off_dps2``);
+    level at the start and the end."""
+    n = plan.n_strides
+    slap_rate = np.deg2rad(impact.slap_rate_dps)
+    strike = np.deg2rad([gait.pitch_rate_heel_strike_dps, gait.pitch_accel_heel_strike_dps2])
+    toe_off = np.deg2rad([gait.pitch_rate_toe_off_dps, gait.pitch_accel_toe_off_dps2])
+    knots = [(0.0, 0.0, 0.0, 0.0)]
+    for k in range(n + 1):
+        if k > 0:
+            knots += [
+                (plan.t_ic[k], plan.pitch_hs[k], *strike),
+                (plan.t_ff[k] - impact.slap_duration_s, -0.5 * slap_rate * impact.slap_duration_s, slap_rate, 0.0),
+                (plan.t_ff[k], 0.0, 0.0, 0.0),
+            ]
+        if k < n:
+            knots += [(plan.t_ho[k], 0.0, 0.0, 0.0), (plan.t_to[k], plan.pitch_to[k], *toe_off)]
+    knots.append((plan.t_end, 0.0, 0.0, 0.0))
+    kn = np.array(knots)
+    keep = np.concatenate([[True], np.diff(kn[:, 0]) > 0])  # stance 0 starts at t = 0
+    stacks = np.zeros((keep.sum(), smooth.NDER))
+    stacks[:, :3] = kn[keep, 1:]
+    return smooth.hermite(kn[keep, 0], stacks)
 
 
 class FootTrajectory:
@@ -49,26 +77,7 @@ class FootTrajectory:
         self.foot_yaw = self.walk_yaw + np.deg2rad(g.toe_out_deg)
         self.frames = [_rot_z(y) for y in self.walk_yaw]
 
-        # pitch: Hermite through knots (value, rate, 0, 0, 0)
-        slap_rate = np.deg2rad(imp.slap_rate_dps)
-        knots = [(0.0, 0.0, 0.0)]
-        for k in range(n + 1):
-            if k > 0:
-                t_slap = plan.t_ff[k] - imp.slap_duration_s
-                knots += [
-                    (plan.t_ic[k], plan.pitch_hs[k], np.deg2rad(g.pitch_rate_heel_strike_dps)),
-                    (t_slap, -0.5 * slap_rate * imp.slap_duration_s, slap_rate),
-                    (plan.t_ff[k], 0.0, 0.0),
-                ]
-            if k < n:
-                knots += [(plan.t_ho[k], 0.0, 0.0),
-                          (plan.t_to[k], plan.pitch_to[k], np.deg2rad(g.pitch_rate_toe_off_dps))]
-        knots.append((plan.t_end, 0.0, 0.0))
-        kn = np.array(knots)
-        keep = np.concatenate([[True], np.diff(kn[:, 0]) > 0])  # stance 0 starts at t = 0
-        stacks = np.zeros((keep.sum(), smooth.NDER))
-        stacks[:, :2] = kn[keep, 1:]
-        self.pitch = smooth.hermite(kn[keep, 0], stacks)
+        self.pitch = pitch_profile(plan, g, imp)
 
         # stance contact displacement (walking frame): heel-strike compression + micro-motion
         v_hs = np.asarray(imp.heel_strike_velocity_mps, float)
@@ -97,6 +106,7 @@ class FootTrajectory:
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
         ]
+        self._contact_at_heel_off = [self._contact_stack(k, np.array([plan.t_ho[k]]))[:, 0, :] for k in range(n)]
         self._toe_at_heel_off = [
             self._stance_heel(k, np.array([plan.t_ho[k]]))[:, 0, 0] + self._toe_vector(k) for k in range(n)
         ]
@@ -193,7 +203,7 @@ class FootTrajectory:
     def _push_off_heel(self, k: int, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) heel point during [t_ho, t_to]: rotation about the (micro-moving) toe contact."""
         out = self._contact_stack(k, t)
-        out[:, 0] -= self._contact_stack(k, np.array([self.plan.t_ho[k]]))[:, 0, :]
+        out[:, 0] -= self._contact_at_heel_off[k]
         _, held_pitch, held_yaw = self._held_angles(k)
         pitch = self.pitch.stack(t)
         pitch[0] += held_pitch

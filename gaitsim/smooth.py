@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.polynomial import polynomial as P
-from scipy.interpolate import BPoly, PPoly
+from scipy.interpolate import PPoly
 
 ORDER = 4  # highest derivative kept continuous
 NDER = ORDER + 1
@@ -40,30 +40,70 @@ class Piecewise:
         self.t1 = float(pp.x[-1])
         self.before = float(pp(self.t0))
         self.after = float(pp(self.t1))
+        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (5, k+1, m)
+        order = pp.c.shape[0]
+        powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of pp.c
+        self._coef = np.zeros((NDER, order, pp.c.shape[1]))
+        self._coef[0] = pp.c
+        for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
+            self._coef[j, 1:] = (self._coef[j - 1] * powers)[:-1]
 
     def stack(self, t: np.ndarray) -> np.ndarray:
-        """Derivative stack (5, N) at times ``t`` (s). Outside the range: held value, zero derivatives."""
-        t = np.asarray(t, float)
+        """Derivative stack (5, N) at times ``t`` (s). Outside the range: held value, zero derivatives.
+
+        All five rows come from one Horner pass over the piece's coefficients (PPoly evaluates one derivative
+        per call, and the foot model asks for thousands of short stacks)."""
+        t = np.asarray(t, float).ravel()
         out = np.zeros((NDER, t.size))
         inside = (t >= self.t0) & (t <= self.t1)
-        ti = t[inside]
-        for j in range(NDER):
-            out[j, inside] = self.pp(ti, nu=j)
+        if inside.any():
+            ti = t[inside]
+            piece = np.clip(np.searchsorted(self.pp.x, ti, side="right") - 1, 0, len(self.pp.x) - 2)
+            local = ti - self.pp.x[piece]
+            coef = self._coef[:, :, piece]  # (5, k+1, n)
+            value = coef[:, 0]
+            for row in range(1, coef.shape[1]):
+                value = value * local + coef[:, row]
+            out[:, inside] = value
         out[0, t < self.t0] = self.before
         out[0, t > self.t1] = self.after
         return out
 
 
+def _hermite_tail() -> np.ndarray:
+    """(5, 5) matrix M with a[5:] = M (b - E a[:5]) for the degree-9 Hermite on [0, 1] (see :func:`hermite`)."""
+    from math import factorial
+
+    k = np.arange(2 * NDER)
+    rows = np.array([[factorial(n) / factorial(n - j) if n >= j else 0.0 for n in k] for j in range(NDER)])
+    return np.linalg.inv(rows[:, NDER:]), rows[:, :NDER]
+
+
+_TAIL_INVERSE, _HEAD = _hermite_tail()
+_FACTORIALS = np.array([1.0, 1.0, 2.0, 6.0, 24.0])
+
+
 def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
     """Piecewise degree-9 polynomial through ``knots`` (s) matching value and derivatives 1..4 at each knot.
+
+    On each interval of length h, with u = (t - t_i) / h the polynomial is ``sum_n a_n u^n``: the first five
+    coefficients are the left knot's derivatives ``a_j = y_j h^j / j!``; the last five solve the five
+    conditions at the right knot, one constant 5 x 5 system for every interval.
 
     Parameters
     ----------
     knots : (K,) increasing times (s).
     stacks : (K, 5) value and derivatives 1..4 at each knot (unit/s^j).
     """
-    bp = BPoly.from_derivatives(np.asarray(knots, float), [list(s) for s in np.asarray(stacks, float)])
-    return Piecewise(PPoly.from_bernstein_basis(bp))
+    knots = np.asarray(knots, float)
+    stacks = np.asarray(stacks, float)
+    h = np.diff(knots)[:, None]
+    powers = h ** np.arange(NDER)
+    head = stacks[:-1] * powers / _FACTORIALS
+    tail = (stacks[1:] * powers - head @ _HEAD.T) @ _TAIL_INVERSE.T
+    a = np.concatenate([head, tail], axis=1)  # (K-1, 10) in u
+    coef = a / h ** np.arange(2 * NDER)  # in t - t_i
+    return Piecewise(PPoly(coef[:, ::-1].T.copy(), knots))
 
 
 def scaled_poly(shape: np.ndarray, t0: float, duration: float, amplitude: float) -> PPoly:

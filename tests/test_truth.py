@@ -323,3 +323,28 @@ def test_every_joint_stack_row_is_the_derivative_of_the_row_above():
     scale = np.abs(here[:, 1:]).max(axis=2, keepdims=True) + 1e-9
     # central differences err by h^2/6 times the next derivative: 2e-5 of the scale at the sharp heel strike
     assert (np.abs(numeric - here[:, 1:]) / scale).max() < 1e-4
+
+
+def test_hermite_pieces_match_value_and_four_derivatives_at_every_knot():
+    rng = np.random.default_rng(1)
+    knots = np.cumsum(rng.uniform(0.01, 0.5, 6))
+    stacks = rng.normal(size=(6, 5)) * [1.0, 10.0, 1e2, 1e3, 1e4]
+    piece = smooth.hermite(knots, stacks)
+    for side in (-1e-12, 1e-12):  # the left and right limits both equal the given stack
+        at = np.clip(knots + side, knots[0], knots[-1])
+        got = np.stack([piece.pp(at, nu=j) for j in range(5)], axis=1)
+        scale = np.abs(stacks).max(axis=0)
+        assert np.all(np.abs(got - stacks) <= 1e-6 * scale), (got - stacks) / scale
+    assert piece.pp.c.shape == (10, 5)  # degree 9 on each of the 5 intervals
+
+
+def test_piecewise_stack_rows_equal_the_polynomial_derivatives():
+    rng = np.random.default_rng(2)
+    knots = np.cumsum(rng.uniform(0.01, 0.5, 6))
+    piece = smooth.hermite(knots, rng.normal(size=(6, 5)) * [1.0, 10.0, 1e2, 1e3, 1e4])
+    t = np.sort(rng.uniform(knots[0] - 0.1, knots[-1] + 0.1, 200))
+    inside = (t >= knots[0]) & (t <= knots[-1])
+    expected = np.stack([piece.pp(t, nu=j) for j in range(5)])
+    expected[1:, ~inside] = 0.0  # held value outside, zero derivatives
+    expected[0, t < knots[0]], expected[0, t > knots[-1]] = piece.before, piece.after
+    np.testing.assert_allclose(piece.stack(t), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
