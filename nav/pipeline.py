@@ -287,11 +287,13 @@ def score_solution(rec: Recording, sol: Solution) -> dict:
     """Scores of a solution (nav.metrics) plus the run's parameters; keys documented in nav.metrics."""
     result = {"scored_against": None}
     if rec.truth is not None:
-        result.update(metrics.score(sol.t, sol.pos, rec.truth.t, rec.truth.pos, sol.quat, rec.truth.quat))
+        result.update(metrics.score(sol.t, sol.pos, rec.truth.t, rec.truth.pos, sol.quat, rec.truth.quat,
+                                    sol.stationary))
         result["scored_against"] = "truth"
         result["detector_confusion"] = metrics.confusion(sol.stationary[sol.start:], rec.truth.stance[sol.start:])
     elif rec.reference is not None:
-        result.update(metrics.score(sol.t, sol.pos, rec.reference.t, rec.reference.pos))
+        result.update(metrics.score(sol.t, sol.pos, rec.reference.t, rec.reference.pos,
+                                    stationary=sol.stationary))
         result["scored_against"] = "reference"
     end = sol.pos[-1]
     result["estimated_end_m"] = end.tolist()

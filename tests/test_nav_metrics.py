@@ -86,3 +86,21 @@ def test_loops_have_no_along_track_axis():
     loop = np.stack([np.cos(t * 2 * np.pi / 10) - 1, np.sin(t * 2 * np.pi / 10), 0 * t], -1) * 5
     s = metrics.score(t, loop + [0.1, 0.0, 0.0], t, loop)
     assert math.isnan(s["along_track_error_m"]) and s["final_error_m"] == pytest.approx(0.1, rel=1e-9)
+
+
+def test_stride_length_ratio_sees_the_stance_points_not_the_swing_path():
+    """Steps of 1.4 m (stance 0.5 s, swing 0.5 s): an estimate 2 % short at every stance, with a sideways
+    swing wiggle the reference lacks, has a stride length ratio of 0.98 exactly, while its sampled path
+    length ratio is inflated by the wiggle."""
+    t = np.arange(0.0, 20.0, 0.01)
+    cycle = np.floor(t)  # stride index
+    phase = t - cycle
+    swing = np.clip((phase - 0.5) / 0.5, 0.0, 1.0)
+    along = 1.4 * (cycle + swing)
+    truth = np.stack([along, np.zeros_like(t), np.zeros_like(t)], -1)
+    est = np.stack([0.98 * along, 0.15 * np.sin(np.pi * swing), np.zeros_like(t)], -1)
+    stationary = phase < 0.5
+    s = metrics.score(t, est, t, truth, stationary=stationary)
+    assert s["stride_length_ratio"] == pytest.approx(0.98, rel=1e-12)
+    assert s["path_length_ratio"] > 1.0
+    assert "stride_length_ratio" not in metrics.score(t, est, t, truth)
