@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 
 import nav
@@ -50,8 +51,17 @@ def test_matched_statistics_agree(fitted):
     _, fit = fitted
     m, t = fit.notes["measured_statistics"], fit.notes["twin_statistics"]
     assert t["period_s"] == pytest.approx(m["period_s"], rel=0.02)
-    assert t["stance_fraction"] == pytest.approx(m["stance_fraction"], abs=0.03)
-    assert t["pitch_high_deg"] == pytest.approx(m["pitch_high_deg"], rel=0.05)
+    assert t["swing_height_m"] == pytest.approx(m["swing_height_m"], rel=0.1)
+    shape = fit.notes["gait_shape_fit"]
+    assert shape["rms_rate_misfit_fit_dps"] < 10.0  # of a profile spanning +-500 deg/s
+    np.testing.assert_allclose(shape["pitch_extremes_twin_deg"], shape["pitch_extremes_measured_deg"], atol=2.0)
+    assert fit.doc["gait"]["pitch_toe_off_deg"] == pytest.approx(55.0, abs=4.0)
+
+
+def test_sensor_position_on_the_foot_is_found(fitted):
+    _, fit = fitted
+    site = np.array(fit.notes["mount_fit"]["site_m"])
+    np.testing.assert_allclose(site[[0, 2]], [0.2, 0.04], atol=0.02)  # the default mount: top of the toes
 
 
 def test_noise_is_matched_to_the_static_part(fitted):

@@ -7,21 +7,25 @@
 2. fit the twin (:mod:`gaitsim.loop.twin`), simulate it, treat the simulation as a measured recording (IMU
    samples and a position reference only) and do the same;
 3. residuals = recording - twin: the signature residuals plus the navigation residuals ``nav_length_ratio``
-   (path-length ratio against a continuous reference, else the start-to-end length ratio), ``nav_heading_drift``
-   (deg/s) and ``nav_final_error`` (m). A navigation residual's uncertainty is the standard deviation of the
-   twin's value over ``NAV_REPEATS`` re-simulations with other seeds (gait variability and sensor noise), at
-   least its ``NAV_FLOOR``;
+   (stride length ratio against a continuous reference, :func:`nav.metrics.stride_length_ratio`, else the
+   start-to-end length ratio), ``nav_heading_drift``
+   (deg/s) and ``nav_final_error`` (m). Every residual's uncertainty includes what the twin fit alone gets
+   wrong, measured on a twin of the twin (:func:`comparison_noise`); a navigation residual's also the
+   standard deviation of the twin's value over ``NAV_REPEATS`` re-simulations with other seeds (gait
+   variability and sensor noise), at least its ``NAV_FLOOR``;
 4. rank the residuals by ``|value| / uncertainty`` (z). The largest significant one (z > ``NOISE_LEVEL``) not
-   yet acted on is tried against every effect of the library that moves it. Not acted on (but reported, and
-   used in the fits of effects that move them): ``DERIVED`` residuals (``stance_shoe`` is a function of the
-   stance gyro and accelerometer residuals) and the navigation residuals, which are the outcome the loop
-   predicts rather than a diagnostic of one effect.
+   yet acted on is tried against every effect of the library that moves it. The navigation residuals come
+   after every signature residual, whatever their z: they are the outcome the loop predicts, and many effects
+   move them, so they are acted on only when no diagnostic of one effect is left (an effect found there must
+   still leave every signature residual it moves at the noise level). Never acted on (but reported, and used
+   in the fits of effects that move them): ``DERIVED`` residuals (``stance_shoe`` is a function of the stance
+   gyro and accelerometer residuals).
    Each effect's magnitude is fitted by minimising ``Q = sum z_i^2`` over the residuals the effect moves,
    with a grid of ``GRID_POINTS`` values plus a bounded Brent refinement, re-simulating the twin each time
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
 5. the effect explaining the most is added to the twin when it explains at least ``EXPLAINED_FRACTION``,
-   lowers Q, and does no harm: no other residual it moves may grow by more than ``NOISE_LEVEL`` in z to above
+   lowers Q, and does no harm: no other residual may grow by more than ``NOISE_LEVEL`` in z to above
    ``NOISE_LEVEL`` (an effect that trades one residual for another is not what the recording shows).
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
    Steps 4-5 repeat for at most ``MAX_ROUNDS`` residuals.
@@ -32,6 +36,8 @@ reported for the twin before any effect and after all accepted ones.
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -47,11 +53,13 @@ from . import residuals, twin as tw
 from .residuals import NOISE_LEVEL, Residual
 
 NAV_REPEATS = 3
+TWIN_OF_TWIN_SEED = 100  # seed offset of the twin's own recordings used to measure the fit floor
+TWIN_OF_TWIN_REPEATS = 2
 NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_error": 0.05}
 NAV_UNITS = {"nav_length_ratio": "1", "nav_heading_drift": "deg/s", "nav_final_error": "m"}
 EXPLAINED_FRACTION = 0.5
 DERIVED = ("stance_shoe",)
-MAX_ROUNDS = 8
+MAX_ROUNDS = 20
 GRID_POINTS = 9
 BRENT_ITERATIONS = 12
 
@@ -78,7 +86,7 @@ class LoopResult:
     residuals_before: dict
     residuals_after: dict
     attributions: list
-    nav_uncertainty: dict
+    noise: dict
     context: dict = field(default_factory=dict)
 
     def navigation_summary(self) -> dict:
@@ -96,7 +104,7 @@ class LoopResult:
 def navigation_metrics(rec: Recording) -> tuple[dict, object]:
     """Navigate ``rec`` and return (metrics, solution): nav_length_ratio, nav_heading_drift, nav_final_error."""
     sol, score = pipeline.run(rec, tw.NAV_OPTIONS)
-    ratio = score.get("path_length_ratio" if len(rec.reference.t) > 2 else "length_ratio", math.nan)
+    ratio = score.get("stride_length_ratio" if len(rec.reference.t) > 2 else "length_ratio", math.nan)
     drift = score.get("heading_drift_deg_per_s", math.nan)
     metrics = {"nav_length_ratio": float(ratio) if ratio is not None else math.nan,
                "nav_heading_drift": float(drift) if drift is not None else math.nan,
@@ -125,21 +133,40 @@ def simulate_side(twin: tw.Twin, measured: Side, with_nav: bool, seed: int | Non
         return measure(sim, with_nav)
 
 
-def compare(measured: Side, twin: Side, nav_uncertainty: dict) -> dict:
-    """All residuals measured - twin (signature residuals, plus navigation ones when both sides have them)."""
-    out = residuals.compare(measured.signature, twin.signature)
+def compare(measured: Side, twin: Side, noise: dict) -> dict:
+    """All residuals measured - twin (signature residuals, plus navigation ones when both sides have them), with
+    the comparison's own uncertainty ``noise`` (:func:`comparison_noise`)."""
+    out = residuals.compare(measured.signature, twin.signature, noise)
     for key, m in measured.nav.items():
         w = twin.nav.get(key, math.nan)
         if math.isfinite(m) and math.isfinite(w):
-            out[key] = Residual(key, NAV_UNITS[key], m, w, m - w, nav_uncertainty[key])
+            out[key] = Residual(key, NAV_UNITS[key], m, w, m - w, noise.get(key, 0.0))
     return out
 
 
-def nav_uncertainty(twin: tw.Twin, measured: Side) -> dict:
-    """Standard deviation of the twin's navigation metrics over NAV_REPEATS seeds, floored by NAV_FLOOR."""
+def comparison_noise(twin: tw.Twin, measured: Side) -> dict:
+    """What a comparison with this twin is uncertain by beyond the stride-to-stride scatter (name -> value).
+
+    - **Fit floor** of every residual: the twin is simulated with another seed and treated as a recording
+      (``TWIN_OF_TWIN_SEED``), a twin is fitted to it the same way, and the residuals between the two are what
+      the fit alone gets wrong (both sides come from the same model, so nothing else differs); the floor is
+      their rms over ``TWIN_OF_TWIN_REPEATS`` such pairs.
+    - **Navigation**: the standard deviation of the twin's navigation metrics over ``NAV_REPEATS`` seeds
+      combined with their fit floor, at least ``NAV_FLOOR``.
+    """
+    squares = {}
+    for k in range(TWIN_OF_TWIN_REPEATS):
+        pseudo = simulate_side(twin, measured, True, twin.seed + TWIN_OF_TWIN_SEED + k)
+        refit = tw.fit_twin(pseudo.recording, pseudo.signature, pseudo.solution)
+        for name, r in compare(pseudo, simulate_side(refit, measured, True), {}).items():
+            if math.isfinite(r.value):
+                squares.setdefault(name, []).append(r.value ** 2)
+    floors = {name: float(math.sqrt(np.mean(v))) for name, v in squares.items()}
     values = [simulate_side(twin, measured, True, twin.seed + 1 + k).nav for k in range(NAV_REPEATS)]
-    return {key: float(max(np.nanstd([v[key] for v in values], ddof=1) if NAV_REPEATS > 1 else 0.0, floor))
-            for key, floor in NAV_FLOOR.items()}
+    for key, least in NAV_FLOOR.items():
+        spread = np.nanstd([v[key] for v in values], ddof=1)
+        floors[key] = float(max(math.hypot(np.nan_to_num(spread), floors.get(key, 0.0)), least))
+    return floors
 
 
 def _q(res: dict, names) -> float:
@@ -152,6 +179,8 @@ class Fit:
 
     effect: fx.Effect
     magnitude: float
+    changes: dict
+    twin_doc: dict
     residuals: dict
     side: Side
     q_before: float
@@ -170,10 +199,23 @@ class Fit:
 
 
 def fit_effect(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, acted: str, ctx: dict,
-               nav_unc: dict) -> Fit:
-    """Fit ``effect``'s magnitude (module docstring, step 4) and measure what it explains of ``acted``."""
+               noise: dict, context_of=None) -> Fit:
+    """Fit ``effect``'s magnitude (module docstring, step 4) and measure what it explains of ``acted`` (one of
+    the residuals it moves: the fit itself does not depend on which).
+
+    An effect whose direction comes from the residuals (``Effect.refine``) is fitted again with the context
+    ``context_of(scenario document, signature)`` of its first fit, and the better of the two fits is kept."""
+    fit = _fit_magnitude(effect, twin, measured, base, ctx, noise)
+    if effect.refine and context_of is not None and fit.side is not None:
+        again = _fit_magnitude(effect, twin, measured, base, context_of(fit.twin_doc, fit.side.signature), noise)
+        fit = again if again.q_after < fit.q_after else fit
+    return judged(fit, base, acted)
+
+
+def _fit_magnitude(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, ctx: dict, noise: dict) -> Fit:
+    """One magnitude search of ``effect`` in context ``ctx``: grid, then bounded Brent around the best point."""
     use_nav = any(name.startswith("nav_") for name in effect.moves)
-    names = [n for n in base if n in effect.moves or n == acted]
+    names = [n for n in base if n in effect.moves]
     low, high = effect.search_bounds(ctx)
     cache = {}
 
@@ -186,7 +228,7 @@ def fit_effect(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, act
             except (ValueError, RecordingError):  # e.g. the twin no longer shows regular strides
                 cache[key] = (math.inf, {}, None)
             else:
-                res = compare(measured, side, nav_unc)
+                res = compare(measured, side, noise)
                 cache[key] = (_q(res, names), res, side)
         return cache[key]
 
@@ -207,11 +249,18 @@ def fit_effect(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, act
         best = axis[i]
     magnitude = float(from_axis(best))
     q_after, res, side = evaluate(magnitude)
+    changes = effect.changes(magnitude, ctx)
+    return Fit(effect, magnitude, changes, twin.with_changes(changes).doc, res, side, _q(base, names), q_after, 0.0)
+
+
+def judged(fit: Fit, base: dict, acted: str) -> Fit:
+    """``fit`` with the fraction of ``acted`` it explains and the other residuals it makes worse."""
+    res = fit.residuals
     before, after = abs(base[acted].value), abs(res[acted].value) if acted in res else math.inf
     fraction = 1.0 - after / before if before > 0 else 0.0
-    harmed = tuple(n for n in effect.moves if n != acted and n in base and n in res
+    harmed = tuple(n for n in res if n != acted and n in base
                    and res[n].z > NOISE_LEVEL and res[n].z > base[n].z + NOISE_LEVEL)
-    return Fit(effect, magnitude, res, side, _q(base, names), q_after, float(fraction), harmed)
+    return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed)
 
 
 def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:
@@ -220,6 +269,7 @@ def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list)
         "residual": acted.name, "unit": acted.unit, "z_before": acted.z,
         "effect": best.effect.name if accepted else "unexplained",
         "scenario_key": best.effect.key if accepted else None,
+        "scenario_changes": best.changes if accepted else None,
         "magnitude": best.magnitude if accepted else None,
         "magnitude_unit": best.effect.unit if accepted else None,
         "residual_before": acted.value, "uncertainty_before": acted.uncertainty,
@@ -239,25 +289,30 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = MAX_
     measured = measure(rec)
     log(f"navigated the recording: {measured.nav}")
     base_twin = tw.fit_twin(rec, measured.signature, measured.solution)
-    nav_unc = nav_uncertainty(base_twin, measured)
+    noise = comparison_noise(base_twin, measured)
     before = simulate_side(base_twin, measured, True)
     current_twin, current_side = base_twin, before
-    current = compare(measured, before, nav_unc)
+    current = compare(measured, before, noise)
     first = dict(current)
-    attributions, acted_names, used = [], set(), set()
+    attributions, acted_names, used, fitted = [], set(), set(), {}
     ctx = fx.context(rec, base_twin.doc, measured.signature, before.signature)
     for _ in range(max_rounds):
         ranked = sorted((r for r in current.values()
-                         if r.name not in acted_names and r.name not in DERIVED and not r.name.startswith("nav_")
-                         and r.z > NOISE_LEVEL),
-                        key=lambda r: -r.z)
+                         if r.name not in acted_names and r.name not in DERIVED and r.z > NOISE_LEVEL),
+                        key=lambda r: (r.name.startswith("nav_"), -r.z))
         if not ranked:
             break
         acted = ranked[0]
         acted_names.add(acted.name)
         ctx = fx.context(rec, current_twin.doc, measured.signature, current_side.signature)
         candidates = [e for e in library if acted.name in e.moves and e.name not in used and fx.applicable(e, ctx)]
-        fits = [fit_effect(e, current_twin, measured, current, acted.name, ctx, nav_unc) for e in candidates]
+        fits = []
+        for e in candidates:  # an effect's fit depends on the twin, not on the residual acted on: fit it once
+            key = (e.name, json.dumps(current_twin.doc, sort_keys=True, default=str))
+            if key not in fitted:
+                fitted[key] = fit_effect(e, current_twin, measured, current, acted.name, ctx, noise,
+                                         lambda doc, sig: fx.context(rec, doc, measured.signature, sig))
+            fits.append(judged(fitted[key], current, acted.name))
         ranked_fits = sorted(fits, key=lambda f: (f.acceptable, f.fraction, -f.q_after), reverse=True)
         best = ranked_fits[0] if ranked_fits else None
         accepted = best is not None and best.acceptable
@@ -266,8 +321,8 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = MAX_
                                                      f"explains {best.fraction:.0%}" if accepted else "unexplained"))
         if accepted:
             used.add(best.effect.name)
-            current_twin = tw.match_noise(current_twin.with_changes(best.effect.changes(best.magnitude, ctx)))
+            current_twin = tw.match_noise(current_twin.with_changes(best.changes))
             current_side = simulate_side(current_twin, measured, True)
-            current = compare(measured, current_side, nav_unc)
+            current = compare(measured, current_side, noise)
     return LoopResult(measured, base_twin, current_twin, before, current_side, first, current, attributions,
-                      nav_unc, ctx)
+                      noise, ctx)

@@ -6,13 +6,16 @@ sensor parameters (``withhold = true``) and strips the recording to what a measu
 position reference, like a motion tracker). The loop then fits its own twin without the effect.
 
 ``gyro_scale`` is outside the library on purpose (a 5 % gyro scale factor): the loop must report it as
-unexplained rather than name a wrong effect.
+unexplained rather than name a wrong effect. ``no_effect`` carries nothing undeclared: the loop must name no
+effect there (a false alarm).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from nav.recording import Recording
 
@@ -44,17 +47,20 @@ def _diag(value: float) -> list:
 
 CASES = (
     BlindCase("stance_roll", (("stance_roll", 12.0, "deg/s"),), {"micromotion": {"stance_roll_rate_dps": 12.0}}),
+    BlindCase("stance_rotation", (("stance_rotation", float(np.linalg.norm([3.0, 4.0, -5.0])), "deg/s"),),
+              {"micromotion": {"stance_rotation_dps": [3.0, 4.0, -5.0]}}),
     BlindCase("stance_creep", (("stance_creep", 0.025, "m/s"),),
               {"micromotion": {"creep_velocity_mps": [0.025, 0.0, 0.0]}}),
     BlindCase("impact_ringing", (("impact_ringing", 40.0, "m/s^2"),),
               {"impact": {"ringing_hz": 60.0, "ringing_accel_mps2": 40.0}}),
-    BlindCase("bandwidth", (("bandwidth", 30.0, "Hz"),), sensor={"accel_bandwidth": [30.0, "Hz"],
-                                                                "gyro_bandwidth": [30.0, "Hz"]}),
+    BlindCase("bandwidth", (("bandwidth", 20.0, "Hz"),), sensor={"accel_bandwidth": [20.0, "Hz"],
+                                                                "gyro_bandwidth": [20.0, "Hz"]}),
     BlindCase("accel_gyro_skew", (("accel_gyro_skew", 5.0, "ms"),), sensor={"accel_gyro_skew": [5.0, "ms"]}),
     BlindCase("mount_yaw", (("mount_yaw", 8.0, "deg"),), sensor={"mounting_misalignment": [[0.0, 0.0, 8.0], "deg"]}),
     BlindCase("accel_scale", (("accel_scale", 2.0, "%"),), sensor={"accel_misalignment": [_diag(1.02), "1"]}),
     BlindCase("saturation", (("saturation", 5 * 9.80665, "m/s^2"),), sensor={"accel_range": [5.0, "g"]}),
     BlindCase("outside_gyro_scale", (("outside", 5.0, "%"),), sensor={"gyro_misalignment": [_diag(1.05), "1"]}),
+    BlindCase("no_effect", (("none", 0.0, "-"),), rounds=3),
     BlindCase("roll_and_scale", (("stance_roll", 12.0, "deg/s"), ("accel_scale", 2.0, "%")),
               {"micromotion": {"stance_roll_rate_dps": 12.0}}, {"accel_misalignment": [_diag(1.02), "1"]},
               rounds=2),
@@ -79,8 +85,12 @@ def table_rows(case: BlindCase, result: attribution.LoopResult) -> list[dict]:
     """One row per true effect: found effect, fitted magnitude, residual before/after, nav discrepancy."""
     nav = result.navigation_summary().get("nav_final_error", {})
     rows = []
+    named = [a for a in result.attributions if a["effect"] != "unexplained"]
     for k, (effect, magnitude, unit) in enumerate(case.truths):
-        att = result.attributions[k] if k < len(result.attributions) else {}
+        if effect == "none":  # a false alarm is the first effect named at all
+            att = named[0] if named else {"effect": "none"}
+        else:
+            att = result.attributions[k] if k < len(result.attributions) else {}
         rows.append({
             "case": case.name, "true_effect": effect, "true_magnitude": magnitude, "unit": unit,
             "found_effect": att.get("effect"), "fitted_magnitude": att.get("magnitude"),

@@ -10,8 +10,9 @@ re-run the sensor model on the cached walk).
 |---|---|---|---|
 | stance_creep | [micromotion] creep_velocity_mps (forward) | m/s | stance_velocity, nav_length_ratio |
 | stance_roll | [micromotion] stance_roll_rate_dps | deg/s | stance_gyro, stance_acc_spread, stance_duration |
+| stance_rotation | [micromotion] stance_rotation_dps (direction from the residual) | deg/s | stance_rate_x/y/z, stance_gyro, stance_acc_spread, stance_duration, stance_velocity, nav_length_ratio |
 | impact_ringing | [impact] ringing_accel_mps2 (ringing_hz from the residual spectrum) | m/s^2 | onset_hf, hf40, hf80, acc_peak, stance_acc_spread, stance_duration |
-| bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, profiles |
+| bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
 | accel_scale | [sensor] accel_misalignment = (1 + s) I | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
@@ -30,13 +31,19 @@ from typing import Callable
 
 import numpy as np
 
+from nav import quaternion as quat
 from nav.recording import Recording
+
+from ..foot import FootModel, Mount
+from ..gait import MicroMotionParams
+from ..scenario import fill
 
 from . import residuals
 
 ACC_PROFILES = ("profile_acc_x", "profile_acc_y", "profile_acc_z")
 GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
 RINGING_BAND_HZ = 20.0  # lowest ringing frequency searched in the residual spectrum
+RINGING_SMOOTHING_HZ = 10.0  # width of the moving average applied to both spectra before their log ratio
 
 
 @dataclass(frozen=True)
@@ -53,6 +60,7 @@ class Effect:
     log_scale : search on a logarithmic scale (bounds must then be > 0).
     changes : (magnitude, context) -> {section: {key: value}} merged into the twin's scenario document.
     first_guess : (residuals, context) -> magnitude or None, a closed-form estimate from the residuals.
+    refine : the context (a direction) comes from the residuals: fit once more from the first fit's residuals.
     """
 
     name: str
@@ -64,6 +72,7 @@ class Effect:
     changes: Callable
     first_guess: Callable = lambda res, ctx: None
     log_scale: bool = False
+    refine: bool = False
 
     def search_bounds(self, context: dict) -> tuple[float, float]:
         """Bounds for this recording: a bandwidth stays below 0.45 times the sample rate; a clipping level
@@ -89,6 +98,26 @@ def _roll_guess(res, ctx):
     return ctx["stance_roll_rate_dps"] + 2.0 * math.sqrt(max(m * m - w * w, 0.0))
 
 
+def _rotation_target(ctx: dict) -> np.ndarray:
+    """Stance rotation (deg/s, foot frame) that would close the signed core-stance rate residual."""
+    return np.asarray(ctx["stance_rotation_target_dps"], float)
+
+
+def _rotation_changes(magnitude: float, ctx: dict) -> dict:
+    """The rotation ``magnitude`` (deg/s) along the target direction, and the contact creep that keeps the
+    sensor's forward stance velocity: rotating about pivots on the heel-toe line moves a sensor at height z and
+    side offset y forward by ``w_pitch z - w_yaw y``, a translation the gyro does not measure (the stance
+    velocity residual does, where a reference exists)."""
+    target = _rotation_target(ctx)
+    norm = float(np.linalg.norm(target))
+    rotation = magnitude * (target / norm if norm > 0 else np.zeros(3))
+    change = np.radians(rotation - np.asarray(ctx["stance_rotation_dps"], float))
+    _, side, height = ctx["imu_site_m"]
+    creep = np.asarray(ctx["creep_velocity_mps"], float).copy()
+    creep[0] -= change[1] * height - change[2] * side
+    return {"micromotion": {"stance_rotation_dps": rotation.tolist(), "creep_velocity_mps": creep.tolist()}}
+
+
 def _creep_guess(res, ctx):
     v = _value(res, "stance_velocity")
     return None if v is None else ctx["creep_mps"] + v
@@ -111,6 +140,12 @@ LIBRARY: tuple[Effect, ...] = (
            "[micromotion] stance_roll_rate_dps", "deg/s",
            ("stance_gyro", "stance_acc_spread", "stance_duration"), (0.0, 60.0),
            lambda m, ctx: {"micromotion": {"stance_roll_rate_dps": m}}, _roll_guess),
+    Effect("stance_rotation", "sustained rotation of the standing foot (roll, pitch, yaw rates over foot flat; the "
+           "direction is the core-stance rate residual turned into the foot frame, the magnitude is fitted)",
+           "[micromotion] stance_rotation_dps", "deg/s",
+           ("stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_gyro", "stance_acc_spread", "stance_duration",
+            "stance_velocity", "nav_length_ratio"), (0.0, 30.0),
+           _rotation_changes, lambda res, ctx: float(np.linalg.norm(_rotation_target(ctx))), refine=True),
     Effect("impact_ringing", "damped vertical ringing of foot and mount after heel strike and forefoot slap",
            "[impact] ringing_accel_mps2 (ringing_hz from the residual spectrum)", "m/s^2",
            ("onset_hf", "hf40", "hf80", "acc_peak", "stance_acc_spread", "stance_duration"),
@@ -118,7 +153,8 @@ LIBRARY: tuple[Effect, ...] = (
            lambda m, ctx: {"impact": {"ringing_hz": ctx["ringing_hz"], "ringing_accel_mps2": m}}),
     Effect("bandwidth", "low-pass of the sensor (Butterworth, same cutoff on both sensors)",
            "[sensor] accel_bandwidth, gyro_bandwidth", "Hz",
-           ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag") + ACC_PROFILES + GYR_PROFILES, (8.0, 400.0),
+           ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag", "stance_acc_spread", "stance_duration")
+           + ACC_PROFILES + GYR_PROFILES, (8.0, 400.0),
            lambda m, ctx: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"]), log_scale=True),
     Effect("accel_gyro_skew", "time skew between accelerometer and gyro sampling (> 0: gyro later)",
            "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES, (-20.0, 20.0),
@@ -145,13 +181,17 @@ BY_NAME = {e.name: e for e in LIBRARY}
 
 
 def ringing_frequency(measured: residuals.Signature, twin: residuals.Signature) -> float:
-    """Frequency (Hz) where the measured |a| spectrum most exceeds the twin's, above RINGING_BAND_HZ and below
-    0.45 times the sample rate (5-bin smoothing); NaN when the band is empty."""
+    """Frequency (Hz) where the measured |a| spectrum most exceeds the twin's, as the log ratio of the two
+    spectra smoothed over ``RINGING_SMOOTHING_HZ`` (a damped resonance is a broad bump; a single stride's
+    spectrum is a comb of stride harmonics), between RINGING_BAND_HZ and 0.45 times the sample rate; NaN when
+    the band is empty."""
     f_m, p_m = measured.spectrum
     f_t, p_t = twin.spectrum
     p_t = np.interp(f_m, f_t, p_t)
-    kernel = np.ones(5) / 5
-    excess = np.convolve(p_m, kernel, "same") - np.convolve(p_t, kernel, "same")
+    width = max(1, int(round(RINGING_SMOOTHING_HZ / (f_m[1] - f_m[0]))))
+    kernel = np.ones(width) / width
+    tiny = 1e-12 * max(p_m.max(), p_t.max(), 1e-300)
+    excess = np.log(np.convolve(p_m, kernel, "same") + tiny) - np.log(np.convolve(p_t, kernel, "same") + tiny)
     band = (f_m >= RINGING_BAND_HZ) & (f_m <= 0.45 * measured.rate_hz)
     if not band.any():
         return math.nan
@@ -160,14 +200,26 @@ def ringing_frequency(measured: residuals.Signature, twin: residuals.Signature) 
 
 def context(rec: Recording, twin_doc: dict, measured: residuals.Signature, twin_sig: residuals.Signature) -> dict:
     """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
-    and the twin's current creep, roll rate and sensor roll/pitch on the foot (deg)."""
-    micro = twin_doc.get("micromotion", {})
+    the twin's current creep, stance rotation, roll rate, IMU site (m, foot frame) and sensor roll/pitch on
+    the foot (deg), and the stance rotation (deg/s, foot frame) that closes the core-stance rate residual (the
+    twin's, plus the residual turned from the sensor into the foot frame by the twin's mounting misalignment)."""
+    micro = fill(MicroMotionParams, twin_doc.get("micromotion", {}), "<twin> [micromotion]")
+    site = FootModel(fill(Mount, twin_doc.get("mount", {}), "<twin> [mount]")).lever_arm
     mounting = twin_doc.get("sensor", {}).get("mounting_misalignment", [[0.0, 0.0, 0.0], "deg"])[0]
+    roll, pitch, yaw = np.radians(np.asarray(mounting, float))
+    sensor_to_foot = quat.to_matrix(quat.from_euler_zyx(yaw, pitch, roll))
+    rate_gap = np.array([measured.scalars[f"stance_rate_{a}"].value - twin_sig.scalars[f"stance_rate_{a}"].value
+                         for a in "xyz"])
+    rotation = np.asarray(micro.stance_rotation_dps, float) + sensor_to_foot @ rate_gap
     return {"rate_hz": measured.rate_hz,
+            "stance_rotation_dps": list(micro.stance_rotation_dps),
+            "stance_rotation_target_dps": rotation.tolist(),
+            "imu_site_m": site.tolist(),
             "ringing_hz": round(ringing_frequency(measured, twin_sig), 1),
             "largest_acc_component": float(np.max(np.abs(rec.acc))),
-            "creep_mps": float(micro.get("creep_velocity_mps", [0.01, 0.0, 0.0])[0]),
-            "stance_roll_rate_dps": float(micro.get("stance_roll_rate_dps", 0.0)),
+            "creep_velocity_mps": list(micro.creep_velocity_mps),
+            "creep_mps": float(micro.creep_velocity_mps[0]),
+            "stance_roll_rate_dps": float(micro.stance_roll_rate_dps),
             "mount_roll_pitch_deg": [float(mounting[0]), float(mounting[1])]}
 
 

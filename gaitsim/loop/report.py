@@ -48,7 +48,7 @@ def attribution_document(result: att.LoopResult, label: str) -> dict:
         "explained_threshold": att.EXPLAINED_FRACTION,
         "attributions": result.attributions,
         "navigation": result.navigation_summary(),
-        "navigation_uncertainty": result.nav_uncertainty,
+        "comparison_noise": result.noise,
         "residuals_before": {k: r.as_dict() for k, r in result.residuals_before.items()},
         "residuals_after": {k: r.as_dict() for k, r in result.residuals_after.items()},
         "effect_context": result.context,

@@ -14,6 +14,8 @@ simulated, so two signatures can be compared number by number:
    name                        unit      per-stride statistic
    ==========================  ========  ===============================================================
    stance_gyro                 deg/s     mean |angular rate| over the middle third of the detected stance
+   stance_rate_x, _y, _z       deg/s     mean angular rate per sensor axis there (signed: a sustained
+                                         rotation of the standing foot shows here, a symmetric rocking not)
    stance_acc_spread           m/s^2     rms deviation of the specific force from its mean there (3 axes)
    stance_duration             s         detected stance length (at the detector's threshold)
    stance_shoe                 log10     median log10 of the SHOE statistic inside the detected stance
@@ -38,9 +40,11 @@ simulated, so two signatures can be compared number by number:
    ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean and standard
    error.
 3. Residuals (:func:`compare`): for a scalar, ``measured - twin`` with uncertainty
-   ``sqrt(se_measured^2 + se_twin^2)``; for a profile ``profile_<channel>``, the rms over the phase grid of the
-   mean difference, with the rms of the combined standard error as its uncertainty (pure noise then gives a
-   ratio near 1, not 0). A residual is at the noise level when ``|value| <= NOISE_LEVEL * uncertainty``.
+   ``sqrt(se_measured^2 + se_twin^2 + floor^2)``; for a profile ``profile_<channel>``, the rms over the phase
+   grid of the mean difference, with the rms of the combined standard error (and the floor) as its
+   uncertainty (pure noise then gives a ratio near 1, not 0). The floor is what the twin fit itself is off by
+   (measured by the loop on a twin of its own twin). A residual is at the noise level when
+   ``|value| <= NOISE_LEVEL * uncertainty``.
 
 Navigation residuals (length ratio, heading drift) are added by :mod:`gaitsim.loop.attribution`, which runs
 the filter.
@@ -70,7 +74,7 @@ UNCERTAINTY_FLOOR = {"stance_velocity": 0.0005, "swing_axis_yaw": 0.05}  # refer
 NOISE_LEVEL = 3.0  # a residual with |value| <= NOISE_LEVEL * uncertainty is at the noise level
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
 UNITS = {
-    "stance_gyro": "deg/s", "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
+    "stance_gyro": "deg/s", **{f"stance_rate_{a}": "deg/s" for a in "xyz"}, "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
     "acc_peak": "m/s^2", "gyr_peak": "deg/s", "hf40": "%", "hf80": "%", "onset_hf": "m/s^2", "acc_gyro_lag": "ms",
     "swing_axis_yaw": "deg", "stance_velocity": "m/s", "rest_acc_norm": "m/s^2",
     **{f"profile_{c}": ("m/s^2" if c.startswith("acc") else "deg/s") for c in CHANNELS},
@@ -235,23 +239,27 @@ def curve_shift_ms(curves: np.ndarray, template: np.ndarray, rate_hz: float) -> 
     positive: the gyro feature comes later relative to the accelerometer feature than in the template."""
     lags = np.arange(len(template)) - len(template) // 2
     fine = np.linspace(lags[0], lags[-1], (len(lags) - 1) * LAG_UPSAMPLE + 1)
-    shifts = fine[np.abs(fine) <= lags[-1] / 2]
     inner = np.abs(fine) <= lags[-1] / 2
+    shifts = fine[inner]
     tmpl = np.interp(fine, lags, template)
+    shifted = np.interp((fine[inner][None, :] - shifts[:, None]).ravel(), fine, tmpl).reshape(len(shifts), -1)
     out = np.full(len(curves), math.nan)
     for k, c in enumerate(curves):
-        if not np.all(np.isfinite(c)):
-            continue
-        cf = np.interp(fine, lags, c)
-        cost = [np.sum((cf[inner] - np.interp(fine[inner] - s, fine, tmpl)) ** 2) for s in shifts]
-        out[k] = shifts[int(np.argmin(cost))]
+        if np.all(np.isfinite(c)):
+            cost = np.sum((np.interp(fine, lags, c)[inner][None, :] - shifted) ** 2, axis=1)
+            out[k] = shifts[int(np.argmin(cost))]
     return 1000.0 * out / rate_hz
 
 
+def dominant_axis(gyr: np.ndarray) -> np.ndarray:
+    """Unit principal axis of the angular rate (N, 3) over a stride, signed so that its y component is >= 0."""
+    _, vectors = np.linalg.eigh(gyr.T @ gyr)
+    return vectors[:, -1] * (1.0 if vectors[1, -1] >= 0 else -1.0)
+
+
 def _swing_axis_yaw(gyr: np.ndarray) -> float:
-    """atan2(x, y) (deg) of the principal axis of the angular rate over a stride (y component made positive)."""
-    w, v = np.linalg.eigh(gyr.T @ gyr)
-    axis = v[:, -1] * (1.0 if v[1, -1] >= 0 else -1.0)
+    """atan2(x, y) (deg) of the stride's dominant rotation axis."""
+    axis = dominant_axis(gyr)
     return float(np.degrees(np.arctan2(axis[0], axis[1])))
 
 
@@ -312,7 +320,7 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     acc_norm = np.linalg.norm(acc, axis=1)
     gyr_norm = np.linalg.norm(gyr, axis=1)
     log_stat = np.log10(np.maximum(result.statistic, 1e-12))
-    per = {k: [] for k in ("stance_gyro", "stance_acc_spread", "stance_duration", "stance_shoe", "acc_peak",
+    per = {k: [] for k in ("stance_gyro", "stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_acc_spread", "stance_duration", "stance_shoe", "acc_peak",
                            "gyr_peak", "hf40", "hf80", "onset_hf", "swing_axis_yaw")}
     curves = []
     phase = np.linspace(0.0, 1.0, PHASE_POINTS, endpoint=False)
@@ -323,6 +331,8 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
         third = (c1 - c0) // 3
         core = slice(c0 + third, c1 - third) if c1 - c0 >= 6 else slice(c0, c1)
         per["stance_gyro"].append(np.degrees(gyr_norm[core].mean()))
+        for axis, mean_rate in zip("xyz", np.degrees(gyr[core].mean(0))):
+            per[f"stance_rate_{axis}"].append(mean_rate)
         per["stance_acc_spread"].append(float(np.sqrt(np.mean(np.sum((acc[core] - acc[core].mean(0)) ** 2, 1)))))
         per["stance_duration"].append(t[c1 - 1] - t[c0])
         inside = log_stat[c0:min(c1, len(log_stat))]
@@ -361,28 +371,35 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     return Signature(scalars, profiles, strides, stances, rate, spectrum, np.array(curves))
 
 
-def compare(measured: Signature, twin: Signature) -> dict:
-    """Residuals measured - twin for every number both signatures have (name -> :class:`Residual`)."""
+def compare(measured: Signature, twin: Signature, floors: dict | None = None) -> dict:
+    """Residuals measured - twin for every number both signatures have (name -> :class:`Residual`).
+
+    ``floors`` (name -> value in the residual's unit) adds, in quadrature, what the comparison itself is
+    uncertain by beyond the stride-to-stride scatter (the twin fit's own error, see
+    :func:`gaitsim.loop.attribution.comparison_noise`); ``UNCERTAINTY_FLOOR`` is the least uncertainty."""
+    floors = floors or {}
+
+    def uncertainty(name: str, *parts: float) -> float:
+        combined = math.sqrt(sum(float(np.nan_to_num(x)) ** 2 for x in (*parts, floors.get(name, 0.0))))
+        return max(combined, UNCERTAINTY_FLOOR.get(name, 0.0))
+
     out = {}
     for name, m in measured.scalars.items():
         w = twin.scalars.get(name)
         if w is None or not (math.isfinite(m.value) and math.isfinite(w.value)):
             continue
-        se = max(math.sqrt(np.nan_to_num(m.se) ** 2 + np.nan_to_num(w.se) ** 2), UNCERTAINTY_FLOOR.get(name, 0.0))
-        out[name] = Residual(name, UNITS[name], m.value, w.value, m.value - w.value, se)
+        out[name] = Residual(name, UNITS[name], m.value, w.value, m.value - w.value, uncertainty(name, m.se, w.se))
     if measured.lag_curves.shape[1:] == twin.lag_curves.shape[1:]:
         template = np.nanmean(twin.lag_curves, axis=0)
         m = _mean_se(curve_shift_ms(measured.lag_curves, template, measured.rate_hz))
         w = _mean_se(curve_shift_ms(twin.lag_curves, template, twin.rate_hz))
         if math.isfinite(m.value) and math.isfinite(w.value):
-            se = math.sqrt(np.nan_to_num(m.se) ** 2 + np.nan_to_num(w.se) ** 2)
             out["acc_gyro_lag"] = Residual("acc_gyro_lag", UNITS["acc_gyro_lag"], m.value, w.value,
-                                           m.value - w.value, se)
+                                           m.value - w.value, uncertainty("acc_gyro_lag", m.se, w.se))
     for c in CHANNELS:
         m, w = measured.profiles[c], twin.profiles[c]
-        diff = m.mean - w.mean
-        se = np.sqrt(m.se**2 + w.se**2)
-        rms = float(np.sqrt(np.mean(diff**2)))
-        out[f"profile_{c}"] = Residual(f"profile_{c}", UNITS[f"profile_{c}"], float(np.sqrt(np.mean(m.mean**2))),
-                                       float(np.sqrt(np.mean(w.mean**2))), rms, float(np.sqrt(np.mean(se**2))))
+        name = f"profile_{c}"
+        rms = float(np.sqrt(np.mean((m.mean - w.mean) ** 2)))
+        out[name] = Residual(name, UNITS[name], float(np.sqrt(np.mean(m.mean**2))), float(np.sqrt(np.mean(w.mean**2))),
+                             rms, uncertainty(name, float(np.sqrt(np.mean(m.se**2 + w.se**2)))))
     return out

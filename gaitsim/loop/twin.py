@@ -3,12 +3,11 @@
 Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
 
 - **Timing.** Cadence from the median stride period of the IMU-detected strides; ``cycle_sd_frac`` from their
-  spread; ``foot_flat_frac`` (taken from / given to the swing) so that the twin's gyro-quiet fraction of the
-  stride (|w| below ``residuals.QUIET_RATE_DPS``, a gyro-only measure that accelerometer-side effects do not
-  move) matches the recording's.
-- **Pitch profile.** Per stride, the angular rate about the stride's dominant axis is integrated from the
-  stance (pitch 0) forward to its largest value in swing and backward to its smallest before the next stance;
-  ``pitch_toe_off_deg`` and ``pitch_heel_strike_deg`` are scaled by measured / twin of these extremes.
+  spread.
+- **Gait shape** (:mod:`gaitsim.loop.gait_fit`): the phase fractions, the pitch angles, rates and
+  accelerations at heel strike and toe off, and the forefoot slap, fitted so that the simulator's pitch rate
+  over a stride matches the recording's rate about its dominant axis (gaitmap: 35-40 deg/s rms left, against
+  ~170 deg/s for the default gait).
 - **Clearance.** With a continuous position track, ``swing_height_m`` is scaled by measured / twin median
   height of the track in swing above the stance level.
 - **Stride length and turns.** From the position track at the stance centres (the reference when it has more
@@ -17,16 +16,19 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
   a U-turn (corner above ``HAIRPIN_DEG``) becomes a hairpin, its return leg moved sideways by two corner radii.
   When no polyline fits, a straight walk of the same length.
 - **Rest.** ``stand_start_s`` / ``stand_end_s`` from the first / last detected rest (at least 0.5 s).
+- **Sensor position** on the foot (:mod:`gaitsim.loop.mount_fit`): the position along the foot and the height
+  that best reproduce the recording's accelerometer phase profiles where the foot turns about a ground contact
+  (linear least squares over three simulations).
 - **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window,
-  written as the sensor's ``mounting_misalignment`` (roll, pitch, 0) (the [mount] ``rpy_deg`` of the foot
-  model does not turn the IMU site in this simulator version).
-- **Sensor noise and gyro bias** from the quietest ``QUIET_WINDOW_S`` of the recording: white-noise densities
-  std / sqrt(rate) per axis, and the mean angular rate as the gyro bias. :func:`match_noise` rescales the
+  written as the sensor's ``mounting_misalignment`` (roll, pitch, 0); the library's ``mount_yaw`` effect
+  fits the remaining yaw.
+- **Sensor noise and gyro bias**: white-noise densities std / sqrt(rate) per axis from the quietest
+  ``QUIET_WINDOW_S`` of the recording, and the mean angular rate over every detected rest as the gyro bias. :func:`match_noise` rescales the
   densities so that the twin's *output* has the recording's static standard deviation (once effects such as
   a bandwidth filter the noise, the density that gives it is larger).
 
-Corrections of the timing, pitch and clearance are made by simulating the twin and matching the same
-statistics (``FIT_ITERATIONS`` rounds), so they do not rely on how a detector sees the simulator's events.
+Cadence and clearance are then corrected by simulating the twin and matching the same statistics
+(``FIT_ITERATIONS`` rounds), so they do not rely on how a detector sees the simulator's events.
 """
 
 from __future__ import annotations
@@ -45,18 +47,20 @@ from nav.checks import quietest_window
 from nav.recording import Recording, Reference
 
 from ..errors import ScenarioError
-from ..gait import GaitParams
+from ..gait import GaitParams, ImpactParams
 from ..imu.config import sensor_from_table
 from ..imu.model import apply_sensor
 from ..scenario import scenario_from_dict
 from ..truth import run_generators, simulate_walk
-from . import residuals
+from ..foot import FootModel
+from . import gait_fit, mount_fit, residuals
 
 TWIN_SEED = 7
 FIT_ITERATIONS = 2
 PATH_TOLERANCE_M = 0.3
 HAIRPIN_DEG = 120.0
 QUIET_WINDOW_S = 0.5
+REST_MARGIN_S = 0.25  # s, trimmed from both ends of a detected rest before its gyro mean is taken
 NAV_OPTIONS = pipeline.NavOptions(method="rk4")  # both sides are navigated from their IMU samples
 
 
@@ -143,22 +147,6 @@ def reference_track(rec: Recording) -> tuple[np.ndarray, np.ndarray] | tuple[Non
 
 
 # ------------------------------------------------------------------------------------------------ statistics
-def _pitch_extremes(t: np.ndarray, gyr: np.ndarray, sig: residuals.Signature) -> tuple[float, float]:
-    """Median over strides of the largest and smallest pitch (deg) integrated about the stride's main axis."""
-    highs, lows = [], []
-    for (s0, s1), (c0, c1) in zip(sig.strides, sig.stances):
-        w, v = np.linalg.eigh(gyr[s0:s1].T @ gyr[s0:s1])
-        axis = v[:, -1] * (1.0 if v[1, -1] >= 0 else -1.0)
-        rate = np.degrees(gyr[c1:s1] @ axis)
-        dt = np.diff(t[c1:s1 + 1])
-        forward = np.cumsum(rate * dt)
-        backward = -np.cumsum((rate * dt)[::-1])
-        if len(forward):
-            highs.append(forward.max())
-            lows.append(backward.min())
-    return float(np.median(highs)), float(np.median(lows))
-
-
 def _swing_height(t: np.ndarray, sig: residuals.Signature, pos_t, pos) -> float:
     """Median over strides of the highest track point in swing above the mean of the two stance levels (m)."""
     heights = []
@@ -173,16 +161,12 @@ def _swing_height(t: np.ndarray, sig: residuals.Signature, pos_t, pos) -> float:
 
 
 def gait_statistics(rec: Recording, sig: residuals.Signature, pos_t=None, pos=None) -> dict:
-    """The statistics the twin is matched on (module docstring): period (s), stance_fraction (gyro-quiet), pitch_high and
-    pitch_low (deg), swing_height (m, NaN without a track)."""
+    """The statistics the twin is matched on by simulation (module docstring): period (s), its relative spread,
+    swing_height (m, NaN without a track)."""
     periods = rec.t[sig.strides[:, 1]] - rec.t[sig.strides[:, 0]]
-    quiet = np.degrees(np.linalg.norm(rec.gyr, axis=1)) < residuals.QUIET_RATE_DPS
-    fraction = [quiet[s0:s1].mean() for s0, s1 in sig.strides]
-    high, low = _pitch_extremes(rec.t, rec.gyr, sig)
     height = _swing_height(rec.t, sig, pos_t, pos) if pos is not None else math.nan
     return {"period_s": float(np.median(periods)), "period_sd_frac": float(np.std(periods) / np.mean(periods)),
-            "stance_fraction": float(np.median(fraction)), "pitch_high_deg": high,
-            "pitch_low_deg": low, "swing_height_m": height}
+            "swing_height_m": height}
 
 
 # ------------------------------------------------------------------------------------------------ path
@@ -242,6 +226,19 @@ def _rest_runs(t: np.ndarray, stationary: np.ndarray) -> tuple[float, float]:
     return max(0.5, float(first)), max(0.5, float(last))
 
 
+def _rest_gyro_mean(rec: Recording, stationary: np.ndarray, quiet: tuple[int, int]) -> np.ndarray:
+    """Mean angular rate (rad/s) over every detected rest of at least ``QUIET_WINDOW_S`` after trimming
+    ``REST_MARGIN_S`` from both ends (a detected rest reaches into the first heel off), or over the quietest
+    window when there is none: the gyro bias the twin is given. Over 0.5 s of a consumer gyro its standard
+    error is ~0.03 deg/s, as large as the heading drifts compared, so every rest sample counts."""
+    starts, ends = stationary_runs(stationary)
+    margin = int(round(REST_MARGIN_S / np.median(np.diff(rec.t))))
+    inner = [(s + margin, e - margin) for s, e in zip(starts, ends)
+             if rec.t[e - 1 - margin] - rec.t[s + margin] >= QUIET_WINDOW_S] if margin < len(rec.t) // 4 else []
+    rest = np.concatenate([rec.gyr[s:e] for s, e in inner]) if inner else rec.gyr[quiet[0]:quiet[1]]
+    return rest.mean(axis=0)
+
+
 def _track(rec: Recording, solution) -> tuple[np.ndarray, np.ndarray, str]:
     pos_t, pos = reference_track(rec)
     if pos is not None:
@@ -282,17 +279,33 @@ def fit_twin(rec: Recording, sig: residuals.Signature, solution) -> Twin:
         "sensor": {"preset": "ideal",
                    "accel_noise_density": [(acc_sd / math.sqrt(rate)).tolist(), "m/s^2/sqrt(Hz)"],
                    "gyro_noise_density": [(gyr_sd / math.sqrt(rate)).tolist(), "rad/s/sqrt(Hz)"],
-                   "gyro_bias": [rec.gyr[q0:q1].mean(0).tolist(), "rad/s"],
+                   "gyro_bias": [_rest_gyro_mean(rec, stationary, (q0, q1)).tolist(), "rad/s"],
                    "mounting_misalignment": [[math.degrees(roll), math.degrees(pitch), 0.0], "deg"]},
     }
-    notes.update(static_std={"acc_mps2": acc_sd.tolist(), "gyr_rad_s": gyr_sd.tolist()}, measured_statistics=measured, track=source, path=path_note, stride_length_m=stride_length,
-                 quiet_window_s=[float(rec.t[q0]), float(rec.t[q1 - 1])])
+    shape, shape_quality = gait_fit.fit_pitch_profile(gait_fit.stride_profile(rec.t, rec.acc, rec.gyr, sig),
+                                                      GaitParams(**doc["gait"]), ImpactParams())
+    doc["gait"].update(shape["gait"])
+    doc["impact"] = shape["impact"]
+    notes.update(static_std={"acc_mps2": acc_sd.tolist(), "gyr_rad_s": gyr_sd.tolist()},
+                 measured_statistics=measured, gait_shape_fit=shape_quality, track=source, path=path_note,
+                 stride_length_m=stride_length, quiet_window_s=[float(rec.t[q0]), float(rec.t[q1 - 1])])
     twin = Twin(doc, notes)
+    gait = doc["gait"]
+    phases = mount_fit.contact_phases(gait["heel_rocker_frac"], gait["foot_flat_frac"], gait["push_off_frac"])
+    site, site_quality = mount_fit.fit_lever_arm(
+        sig, lambda r: simulate(twin.with_changes({"mount": mount_table(r)})), phases)
+    twin = twin.with_changes({"mount": mount_table(site)})
+    twin.notes["mount_fit"] = site_quality
     twin = match_noise(twin)
     for _ in range(FIT_ITERATIONS):
         twin = _correct(twin, measured)
     twin.notes["twin_statistics"] = _twin_statistics(twin, measured)
     return twin
+
+
+def mount_table(site: np.ndarray) -> dict:
+    """A [mount] table putting the IMU site at ``site`` (m, foot frame from the heel contact)."""
+    return {"site": "toes", "offset_m": (np.asarray(site, float) - FootModel().lever_arm).tolist()}
 
 
 def _twin_statistics(twin: Twin, measured: dict) -> dict:
@@ -303,19 +316,10 @@ def _twin_statistics(twin: Twin, measured: dict) -> dict:
 
 
 def _correct(twin: Twin, measured: dict) -> Twin:
-    """One matching round: scale the gait parameters by measured / twin statistics."""
+    """One matching round: scale the cadence and the clearance by twin / measured statistics."""
     have = _twin_statistics(twin, measured)
-    gait = GaitParams(**{k: v for k, v in twin.doc["gait"].items()})
-    fields = dataclasses.asdict(gait)
-    changes = {"cadence_steps_per_min": fields["cadence_steps_per_min"] * have["period_s"] / measured["period_s"],
-               "pitch_toe_off_deg": float(np.clip(fields["pitch_toe_off_deg"] * measured["pitch_high_deg"]
-                                                  / have["pitch_high_deg"], 5.0, 85.0)),
-               "pitch_heel_strike_deg": float(np.clip(fields["pitch_heel_strike_deg"] * measured["pitch_low_deg"]
-                                                      / have["pitch_low_deg"], -60.0, -2.0))}
-    flat = fields["foot_flat_frac"] + (measured["stance_fraction"] - have["stance_fraction"])
-    flat = float(np.clip(flat, 0.05, fields["foot_flat_frac"] + fields["swing_frac"] - 0.2))
-    changes["swing_frac"] = fields["swing_frac"] - (flat - fields["foot_flat_frac"])
-    changes["foot_flat_frac"] = flat
+    fields = dataclasses.asdict(GaitParams(**twin.doc["gait"]))
+    changes = {"cadence_steps_per_min": fields["cadence_steps_per_min"] * have["period_s"] / measured["period_s"]}
     if math.isfinite(measured["swing_height_m"]) and have["swing_height_m"] > 0:
         changes["swing_height_m"] = float(np.clip(fields["swing_height_m"] * measured["swing_height_m"]
                                                   / have["swing_height_m"], 0.01, 0.3))

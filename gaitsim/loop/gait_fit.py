@@ -1,0 +1,192 @@
+"""The twin's gait shape: events, pitch angles and rates fitted to a recording's stride-normalised pitch rate.
+
+The foot's dominant motion is its pitch. Per stride (gyro onset to gyro onset, :mod:`gaitsim.loop.residuals`),
+the angular rate about the stride's dominant axis is averaged on a phase grid (:func:`stride_profile`) and its
+integral gives the pitch. The simulator's pitch of a steady stride comes from
+:func:`gaitsim.profile.pitch_profile` alone (no MuJoCo; a few ms), so it can be fitted:
+
+1. **Events from features** (:func:`initial_guess`): heel strike at the impact peak of |a| late in the stride;
+   the forefoot slap from the largest rocker rate after it to the quiet stance; heel off where the rate leaves
+   the stance floor; toe off at the push-off rate peak (the rate reverses right after the toe leaves). Pitch
+   and rate at each event are read off the measured profile.
+2. **Least squares** (:func:`fit_pitch_profile`) from the better of that estimate and the given gait (the
+   simulator's defaults at the recording's cadence), on the rate profile plus the stride's largest and
+   smallest pitch (one degree weighs ``ANGLE_WEIGHT`` deg/s). Combinations the scenario validation refuses
+   cost a large penalty.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .. import path as paths
+from ..errors import ScenarioError
+from ..gait import GaitParams, ImpactParams, MicroMotionParams, Walk, plan_stances
+from ..profile import pitch_profile
+from ..scenario import validate_gait
+from . import residuals
+
+POINTS = 128  # phase grid of the profiles
+ANGLE_WEIGHT = 10.0  # deg/s of rate misfit per degree of pitch-extreme misfit
+MAX_EVALUATIONS = 600
+MIN_SWING_FRAC = 0.25
+STANCE_FLOOR = 0.1  # heel off: where the rate first exceeds this share of the push-off peak
+# (name, section, low, high): what the fit varies; swing_frac = 1 - the three stance fractions
+FITTED = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", "gait", 0.05, 0.5),
+          ("push_off_frac", "gait", 0.05, 0.35), ("pitch_heel_strike_deg", "gait", -45.0, -2.0),
+          ("pitch_rate_heel_strike_dps", "gait", -300.0, 700.0), ("pitch_toe_off_deg", "gait", 5.0, 85.0),
+          ("pitch_rate_toe_off_dps", "gait", -300.0, 900.0), ("pitch_accel_toe_off_dps2", "gait", -4e4, 1e4),
+          ("pitch_accel_heel_strike_dps2", "gait", -2e4, 2e4), ("slap_rate_dps", "impact", 0.0, 900.0),
+          ("slap_duration_s", "impact", 0.005, 0.15))
+GAIT_FIELDS = {f.name for f in dataclasses.fields(GaitParams)}
+
+
+@dataclass
+class StrideProfile:
+    """Stride-normalised pitch of a recording (or of the model) on ``POINTS`` phases from the gyro onset.
+
+    Attributes
+    ----------
+    rate : (P,) deg/s, angular rate about the stride's dominant axis (positive: toes down).
+    angle : (P,) deg, its integral from the onset, detrended to close over the stride.
+    acc_norm : (P,) m/s^2, |specific force| (NaN for the model).
+    period_s : s, median stride period.
+    """
+
+    rate: np.ndarray
+    angle: np.ndarray
+    acc_norm: np.ndarray
+    period_s: float
+
+    @property
+    def phase(self) -> np.ndarray:
+        return np.linspace(0.0, 1.0, len(self.rate), endpoint=False)
+
+
+def _angle(rate: np.ndarray, period_s: float) -> np.ndarray:
+    """Integral (deg) of a rate profile (deg/s) over the phase grid, a linear trend removed so it closes."""
+    step = period_s / len(rate)
+    angle = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * step)])
+    closing = angle[-1] + 0.5 * (rate[-1] + rate[0]) * step
+    return angle - closing * np.arange(len(rate)) / len(rate)
+
+
+def stride_profile(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, sig: residuals.Signature) -> StrideProfile:
+    """Mean over the signature's strides of the rate about each stride's dominant axis and of |a|."""
+    phase = np.linspace(0.0, 1.0, POINTS, endpoint=False)
+    rates, norms = [], []
+    for s0, s1 in sig.strides:
+        grid = t[s0] + phase * (t[s1] - t[s0])
+        rates.append(np.interp(grid, t[s0:s1 + 1], np.degrees(gyr[s0:s1 + 1] @ residuals.dominant_axis(gyr[s0:s1]))))
+        norms.append(np.interp(grid, t[s0:s1 + 1], np.linalg.norm(acc[s0:s1 + 1], axis=1)))
+    period = float(np.median(t[sig.strides[:, 1]] - t[sig.strides[:, 0]]))
+    rate = np.mean(rates, axis=0)
+    return StrideProfile(rate, _angle(rate, period), np.mean(norms, axis=0), period)
+
+
+def model_profile(gait: GaitParams, impact: ImpactParams) -> StrideProfile:
+    """The simulator's pitch over one steady stride of ``gait`` / ``impact`` on the same phase grid (origin where
+    |rate| last rose above ``residuals.QUIET_RATE_DPS`` before mid foot flat)."""
+    steady = dataclasses.replace(gait, stride_length_sd_m=0.0, cycle_sd_frac=0.0, pitch_sd_deg=0.0,
+                                 stand_start_s=0.5, stand_end_s=0.5)
+    walk = Walk(path=paths.straight(4 * steady.stride_length_m, 0.0), gait=steady, impact=impact)
+    plan = plan_stances(walk, np.random.default_rng(0))
+    k = 2
+    grid = np.linspace(plan.t_ic[k - 1], plan.t_ho[k + 1], 4000)
+    angle, rate = np.degrees(pitch_profile(plan, steady, impact).stack(grid)[:2])
+    loud = np.flatnonzero(np.abs(rate) >= residuals.QUIET_RATE_DPS)
+    onsets = []
+    for j in (k, k + 1):  # like residuals.gyro_onsets: the first quiet point after the last loud one
+        before = loud[grid[loud] < 0.5 * (plan.t_ff[j] + plan.t_ho[j])]
+        onsets.append(grid[before[-1] + 1] if len(before) else plan.t_ff[j])
+    at = onsets[0] + np.linspace(0.0, 1.0, POINTS, endpoint=False) * (onsets[1] - onsets[0])
+    return StrideProfile(np.interp(at, grid, rate), np.interp(at, grid, angle) - np.interp(onsets[0], grid, angle),
+                         np.full(POINTS, np.nan), onsets[1] - onsets[0])
+
+
+def initial_guess(measured: StrideProfile) -> dict:
+    """Gait events, pitch angles and rates read off the measured profile (module docstring, step 1)."""
+    phase, rate, angle = measured.phase, measured.rate, measured.angle
+    late = phase > 0.6
+    i_ic = int(np.flatnonzero(late)[np.argmax(measured.acc_norm[late])]) if np.any(np.isfinite(measured.acc_norm)) \
+        else int(np.flatnonzero(late)[np.argmin(angle[late])])
+    early = phase < phase[i_ic] - 0.15
+    i_to = int(np.argmax(np.where(early, rate, -np.inf)))
+    rising = np.flatnonzero((rate[:i_to] < STANCE_FLOOR * rate[i_to]))
+    i_ho = int(rising[-1]) if len(rising) else i_to // 2
+    quiet = np.flatnonzero(np.abs(rate[:i_ho + 1]) < STANCE_FLOOR * rate[i_to])
+    i_ff = int(quiet[0]) if len(quiet) else 0
+    rocker = np.r_[i_ic:POINTS]
+    i_slap = int(rocker[np.argmax(rate[rocker])])
+    period = measured.period_s
+    rocker_frac = 1.0 - phase[i_ic] + phase[i_ff]
+    accel = np.gradient(rate, period / len(rate))
+    return {
+        "heel_rocker_frac": rocker_frac, "foot_flat_frac": phase[i_ho] - phase[i_ff],
+        "push_off_frac": phase[i_to] - phase[i_ho],
+        "pitch_heel_strike_deg": angle[i_ic], "pitch_rate_heel_strike_dps": rate[i_ic],
+        "pitch_accel_heel_strike_dps2": accel[i_ic],
+        "pitch_toe_off_deg": angle[i_to], "pitch_rate_toe_off_dps": rate[i_to], "pitch_accel_toe_off_dps2": accel[i_to],
+        "slap_rate_dps": max(rate[i_slap], 0.0),
+        "slap_duration_s": min((1.0 - phase[i_slap] + phase[i_ff]) * period, 0.7 * rocker_frac * period),
+    }
+
+
+def _apply(values: dict, gait: GaitParams, impact: ImpactParams) -> tuple[GaitParams, ImpactParams]:
+    values = dict(values)
+    values["swing_frac"] = 1.0 - values["heel_rocker_frac"] - values["foot_flat_frac"] - values["push_off_frac"]
+    return (dataclasses.replace(gait, **{k: v for k, v in values.items() if k in GAIT_FIELDS}),
+            dataclasses.replace(impact, **{k: v for k, v in values.items() if k not in GAIT_FIELDS}))
+
+
+def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactParams) -> tuple[dict, dict]:
+    """Fit the events, pitch angles and rates and the slap (module docstring) for a gait of ``gait``'s cadence.
+
+    Returns
+    -------
+    changes : {"gait": {...}, "impact": {...}} to merge into a scenario document (swing_frac included).
+    quality : rms rate misfit (deg/s) of the feature estimate and of the fit, and the fitted pitch extremes.
+    """
+    names = [name for name, _, _, _ in FITTED]
+    low = np.array([lo for _, _, lo, _ in FITTED])
+    high = np.array([hi for _, _, _, hi in FITTED])
+    inside = 1e-6 * (high - low)
+    guess = initial_guess(measured)
+    starts = {"features": np.array([guess[n] for n in names], float),
+              "given": np.array([getattr(impact if sec == "impact" else gait, n) for n, sec, _, _ in FITTED], float)}
+    extremes = np.array([measured.angle.max(), measured.angle.min()])
+
+    def cost(x):
+        g, i = _apply(dict(zip(names, x)), gait, impact)
+        if g.swing_frac < MIN_SWING_FRAC:
+            return np.full(POINTS + 2, 1e3 * (1.0 + MIN_SWING_FRAC - g.swing_frac))
+        try:
+            validate_gait(g, i, MicroMotionParams(), "<pitch fit>")
+        except ScenarioError:
+            return np.full(POINTS + 2, 1e3)
+        model = model_profile(g, i)
+        return np.concatenate([model.rate - measured.rate,
+                               ANGLE_WEIGHT * (np.array([model.angle.max(), model.angle.min()]) - extremes)])
+
+    costs = {}
+    for label, x in starts.items():
+        starts[label] = np.clip(x, low + inside, high - inside)
+        costs[label] = float(np.sum(cost(starts[label]) ** 2))
+    origin = min(costs, key=costs.get)
+    found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low, diff_step=1e-3,
+                          max_nfev=MAX_EVALUATIONS)
+    best = found.x if np.sum(found.fun ** 2) <= costs[origin] else starts[origin]
+    g, i = _apply(dict(zip(names, best)), gait, impact)
+    changes = {"gait": {n: float(getattr(g, n)) for n, sec, _, _ in FITTED if sec == "gait"},
+               "impact": {n: float(getattr(i, n)) for n, sec, _, _ in FITTED if sec == "impact"}}
+    changes["gait"]["swing_frac"] = float(g.swing_frac)
+    model = model_profile(g, i)
+    quality = {"start": origin, "rms_misfit_at_starts": {k: float(np.sqrt(v / (POINTS + 2))) for k, v in costs.items()},
+               "rms_rate_misfit_fit_dps": float(np.sqrt(np.mean((model.rate - measured.rate) ** 2))),
+               "pitch_extremes_measured_deg": extremes.tolist(),
+               "pitch_extremes_twin_deg": [float(model.angle.max()), float(model.angle.min())]}
+    return changes, quality
