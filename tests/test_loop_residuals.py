@@ -69,3 +69,13 @@ def test_too_short_a_recording_is_refused():
     n = int(3.0 * 200)
     with pytest.raises(ValueError, match="regular strides"):
         residuals.signature(rec.t[:n], rec.acc[:n], rec.gyr[:n])
+
+
+def test_clipping_shows_as_flat_tops_and_a_sharp_peak_does_not():
+    from gaitsim.loop.effects import clipped_runs
+
+    t = np.arange(1000) / 200.0
+    force = sum(60.0 * np.exp(-(((t - hit) / 0.01) ** 2)) for hit in (0.5, 1.5, 2.5, 3.5, 4.5))  # on samples
+    acc = np.stack([force, 0.1 * force, np.full_like(t, 9.81)], axis=1)
+    assert clipped_runs(acc) == 0  # the samples beside a 10 ms peak read 78 % of it
+    assert clipped_runs(np.clip(acc, -40.0, 40.0)) == 5  # three samples beyond the range at each peak

@@ -25,8 +25,10 @@
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
 5. the effect explaining the most is added to the twin when it explains at least ``EXPLAINED_FRACTION``,
-   lowers Q, and does no harm: no other residual may grow by more than ``NOISE_LEVEL`` in z to above
-   ``NOISE_LEVEL`` (an effect that trades one residual for another is not what the recording shows).
+   lowers Q, and does no harm: no other residual, navigation included, may grow by more than ``NOISE_LEVEL``
+   in z to above ``NOISE_LEVEL`` (an effect that trades one residual for another is not what the recording
+   shows). An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
+   candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
    Steps 4-5 repeat for at most ``MAX_ROUNDS`` residuals.
 
@@ -126,8 +128,10 @@ def measure(rec: Recording, with_nav: bool = True) -> Side:
 def simulate_side(twin: tw.Twin, measured: Side, with_nav: bool, seed: int | None = None) -> Side:
     """Simulate the twin and measure it like the recording (same kind of reference)."""
     sim = tw.as_measured(tw.simulate(twin, seed))
-    if tw.reference_track(measured.recording)[0] is None:
-        sim.reference.t, sim.reference.pos = sim.reference.t[[0, -1]], sim.reference.pos[[0, -1]]
+    if tw.reference_track(measured.recording)[0] is None:  # start and end only, inside the IMU's span (a
+        # time skew drops samples at both ends)
+        inside = np.flatnonzero((sim.reference.t >= sim.t[0]) & (sim.reference.t <= sim.t[-1]))[[0, -1]]
+        sim.reference.t, sim.reference.pos = sim.reference.t[inside], sim.reference.pos[inside]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # input checks on candidate twins (e.g. clipping) are expected
         return measure(sim, with_nav)
@@ -191,11 +195,18 @@ class Fit:
     def summary(self) -> dict:
         return {"effect": self.effect.name, "magnitude": self.magnitude, "unit": self.effect.unit,
                 "fraction_explained": self.fraction, "q_before": self.q_before, "q_after": self.q_after,
-                "made_worse": list(self.harmed)}
+                "made_worse": list(self.harmed), "identifiable": self.identifiable}
+
+    @property
+    def identifiable(self) -> bool:
+        """An effect that moves navigation residuals only can close one whatever caused it: it is fitted and
+        reported as a candidate but never named."""
+        return any(not name.startswith("nav_") for name in self.effect.moves)
 
     @property
     def acceptable(self) -> bool:
-        return self.fraction >= EXPLAINED_FRACTION and self.q_after < self.q_before and not self.harmed
+        return (self.identifiable and self.fraction >= EXPLAINED_FRACTION and self.q_after < self.q_before
+                and not self.harmed)
 
 
 def fit_effect(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, acted: str, ctx: dict,
@@ -219,12 +230,12 @@ def _fit_magnitude(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
     low, high = effect.search_bounds(ctx)
     cache = {}
 
-    def evaluate(m: float):
-        key = round(float(m), 12)
+    def evaluate(m: float, with_nav: bool = use_nav):
+        key = (round(float(m), 12), with_nav)
         if key not in cache:
             try:
                 changed = tw.match_noise(twin.with_changes(effect.changes(float(m), ctx)))
-                side = simulate_side(changed, measured, use_nav)
+                side = simulate_side(changed, measured, with_nav)
             except (ValueError, RecordingError):  # e.g. the twin no longer shows regular strides
                 cache[key] = (math.inf, {}, None)
             else:
@@ -248,7 +259,7 @@ def _fit_magnitude(effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
     else:
         best = axis[i]
     magnitude = float(from_axis(best))
-    q_after, res, side = evaluate(magnitude)
+    q_after, res, side = evaluate(magnitude, True)  # navigated, so that no harm to navigation goes unseen
     changes = effect.changes(magnitude, ctx)
     return Fit(effect, magnitude, changes, twin.with_changes(changes).doc, res, side, _q(base, names), q_after, 0.0)
 

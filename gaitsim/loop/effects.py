@@ -44,6 +44,8 @@ ACC_PROFILES = ("profile_acc_x", "profile_acc_y", "profile_acc_z")
 GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
 RINGING_BAND_HZ = 20.0  # lowest ringing frequency searched in the residual spectrum
 RINGING_SMOOTHING_HZ = 10.0  # width of the moving average applied to both spectra before their log ratio
+CLIP_BAND = 0.01  # a clipped sample lies within this share of the recording's largest accelerometer reading
+MIN_CLIPPED_RUNS = 2  # runs of >= 2 consecutive such samples needed before saturation is tried
 
 
 @dataclass(frozen=True)
@@ -198,6 +200,17 @@ def ringing_frequency(measured: residuals.Signature, twin: residuals.Signature) 
     return float(f_m[band][np.argmax(excess[band])])
 
 
+def clipped_runs(acc: np.ndarray) -> int:
+    """Number of flat tops in an accelerometer record (N, 3): runs of at least two consecutive samples of one
+    axis within ``CLIP_BAND`` of the largest reading of any axis. A sensor that clips holds its limit while the
+    true force is beyond it; an unclipped impact peak is a single sample (gaitmap's readings that touch +-16 g
+    are isolated samples: no flat top)."""
+    top = np.abs(acc) >= (1.0 - CLIP_BAND) * np.max(np.abs(acc))
+    edges = np.diff(np.vstack([np.zeros((1, 3), int), top.astype(int), np.zeros((1, 3), int)]), axis=0)
+    lengths = [np.flatnonzero(edges[:, i] == -1) - np.flatnonzero(edges[:, i] == 1) for i in range(3)]
+    return int(sum(np.sum(n >= 2) for n in lengths))
+
+
 def context(rec: Recording, twin_doc: dict, measured: residuals.Signature, twin_sig: residuals.Signature) -> dict:
     """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
     the twin's current creep, stance rotation, roll rate, IMU site (m, foot frame) and sensor roll/pitch on
@@ -217,6 +230,7 @@ def context(rec: Recording, twin_doc: dict, measured: residuals.Signature, twin_
             "imu_site_m": site.tolist(),
             "ringing_hz": round(ringing_frequency(measured, twin_sig), 1),
             "largest_acc_component": float(np.max(np.abs(rec.acc))),
+            "clipped_runs": clipped_runs(rec.acc),
             "creep_velocity_mps": list(micro.creep_velocity_mps),
             "creep_mps": float(micro.creep_velocity_mps[0]),
             "stance_roll_rate_dps": float(micro.stance_roll_rate_dps),
@@ -224,8 +238,12 @@ def context(rec: Recording, twin_doc: dict, measured: residuals.Signature, twin_
 
 
 def applicable(effect: Effect, ctx: dict) -> bool:
-    """False when the recording cannot show the effect (ringing without a usable spectrum band)."""
+    """False when the recording cannot show the effect: ringing without a usable spectrum band, saturation
+    without flat tops at the largest reading (:func:`clipped_runs`; lower impact peaks alone are as well the
+    gait's)."""
     if effect.name == "impact_ringing":
         return math.isfinite(ctx["ringing_hz"]) and ctx["ringing_hz"] >= 5
+    if effect.name == "saturation" and ctx["clipped_runs"] < MIN_CLIPPED_RUNS:
+        return False
     low, high = effect.search_bounds(ctx)
     return high > low
