@@ -128,7 +128,11 @@ class MicroMotionParams:
         angles, equal to the body rates about the foot's x (toes), y (left), z (up) axes to first order in the
         (few-degree) stance angles. Measured foot IMUs show it in every recording (gaitmap, x-io, UCR:
         core-stance rates of 2-6 deg/s per axis, signs mirrored in roll and yaw between left and right foot:
-        pronation, heel rise, internal rotation). Default (0, 0, 0).
+        pronation, heel rise, internal rotation). Default (0, 0, 0). Fitted by ``gaitsim loop``
+        (results/loop/): a heel rise (pitch) of 5-6 deg/s on every measured foot, and roll and yaw that depend
+        on the side, about (+4, 5, -5) for a left foot and (-4, 5, +6) for a right one. The default stays off
+        because switching the pitch on changes the paper reproduction (along-track loss 0.93 -> 1.25 m) and
+        the blind bandwidth case (see the loop's README).
     stance_rotation_pivot_frac : (pitch, yaw) pivots of the sustained rotation, each a fraction of the way from
         the heel contact (0) to the toe contact (1): the foot yaws about the vertical axis through the yaw pivot,
         then pitches about the lateral axis through the pitch pivot; roll turns about the heel-toe line and
