@@ -254,7 +254,7 @@ class FootTrajectory:
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
         t = np.asarray(t, float)
-        plan, g, mm = self.plan, self.walk.gait, self.walk.micro
+        plan, g = self.plan, self.walk.gait
         yaw = np.zeros((smooth.NDER, t.size))
         yaw[0] = self.foot_yaw[0]
         roll = np.zeros((smooth.NDER, t.size))

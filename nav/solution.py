@@ -52,13 +52,14 @@ class Solution:
         return np.column_stack([self.t[s], self.pos[s], self.vel[s], self.quat[s], self.stationary[s].astype(float)])
 
 
-def _jsonable(o):
+def jsonable(o):
+    """JSON-ready copy: numpy to Python, non-finite floats to None."""
     if isinstance(o, dict):
-        return {str(k): _jsonable(v) for k, v in o.items()}
+        return {str(k): jsonable(v) for k, v in o.items()}
     if isinstance(o, (list, tuple)):
-        return [_jsonable(v) for v in o]
+        return [jsonable(v) for v in o]
     if isinstance(o, np.ndarray):
-        return _jsonable(o.tolist())
+        return jsonable(o.tolist())
     if isinstance(o, (np.floating, float)):
         return None if not math.isfinite(float(o)) else float(o)
     if isinstance(o, (np.integer,)):
@@ -79,7 +80,7 @@ def write_solution_into(folder: Path, solution: Solution, score: dict) -> None:
 def write_json(path: Path, doc: dict) -> None:
     """JSON with non-finite numbers written as null and numpy values as plain numbers."""
     with open(path, "w") as fh:
-        json.dump(_jsonable(doc), fh, indent=2, sort_keys=True)
+        json.dump(jsonable(doc), fh, indent=2, sort_keys=True)
 
 
 def write_solution(folder: str | Path, solution: Solution, score: dict, overwrite: bool = False) -> Path:

@@ -17,6 +17,7 @@ import warnings
 from pathlib import Path
 
 from nav.recording import RecordingError, atomic_output_dir, list_runs, read_recording
+from nav.solution import jsonable
 
 from . import attribution, blind, report
 
@@ -89,7 +90,7 @@ def _run_blind(folder: Path) -> list[str]:
         result = blind.run_case(case)
         rows += blind.table_rows(case, result)
         print(f"blind {case.name}: {[a['effect'] for a in result.attributions]}")
-    (folder / "blind.json").write_text(json.dumps(report._clean(rows), indent=1))
+    (folder / "blind.json").write_text(json.dumps(jsonable(rows), indent=1))
     fmt = report._fmt
     lines = ["# Blind tests", "", blind.__doc__.strip(), "",
              "| case | true effect | true magnitude | found | fitted | residual | before | after (uncertainty) | "

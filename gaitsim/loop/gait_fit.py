@@ -77,15 +77,12 @@ def _angle(rate: np.ndarray, period_s: float) -> np.ndarray:
 
 def stride_profile(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, sig: residuals.Signature) -> StrideProfile:
     """Mean over the signature's strides of the rate about each stride's dominant axis and of |a|."""
-    phase = np.linspace(0.0, 1.0, POINTS, endpoint=False)
-    rates, norms = [], []
-    for s0, s1 in sig.strides:
-        grid = t[s0] + phase * (t[s1] - t[s0])
-        rates.append(np.interp(grid, t[s0:s1 + 1], np.degrees(gyr[s0:s1 + 1] @ residuals.dominant_axis(gyr[s0:s1]))))
-        norms.append(np.interp(grid, t[s0:s1 + 1], np.linalg.norm(acc[s0:s1 + 1], axis=1)))
+    gyr_phases = residuals.phase_resample(t, np.degrees(gyr), sig.strides, POINTS)  # (S, P, 3)
+    axes = np.array([residuals.dominant_axis(gyr[s0:s1]) for s0, s1 in sig.strides])
+    rate = np.einsum("spi,si->p", gyr_phases, axes) / len(axes)
+    acc_norm = residuals.phase_resample(t, np.linalg.norm(acc, axis=1), sig.strides, POINTS).mean(0)
     period = float(np.median(t[sig.strides[:, 1]] - t[sig.strides[:, 0]]))
-    rate = np.mean(rates, axis=0)
-    return StrideProfile(rate, _angle(rate, period), np.mean(norms, axis=0), period)
+    return StrideProfile(rate, _angle(rate, period), acc_norm, period)
 
 
 def model_profile(gait: GaitParams, impact: ImpactParams) -> StrideProfile:

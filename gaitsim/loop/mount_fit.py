@@ -27,13 +27,8 @@ ACC_CHANNELS = ("acc_x", "acc_y", "acc_z")
 
 
 def _acc_profiles(rec, strides: np.ndarray) -> np.ndarray:
-    """(3 * P,) accelerometer phase profiles (m/s^2) of ``rec`` cut at the given strides."""
-    phase = np.linspace(0.0, 1.0, residuals.PHASE_POINTS, endpoint=False)
-    rows = []
-    for s0, s1 in strides:
-        grid = rec.t[s0] + phase * (rec.t[s1] - rec.t[s0])
-        rows.append(np.concatenate([np.interp(grid, rec.t[s0:s1 + 1], rec.acc[s0:s1 + 1, i]) for i in range(3)]))
-    return np.mean(rows, axis=0)
+    """(3 * P,) accelerometer phase profiles (m/s^2) of ``rec`` cut at the given strides, channel after channel."""
+    return residuals.phase_resample(rec.t, rec.acc, strides).mean(0).T.ravel()
 
 
 def contact_phases(heel_rocker_frac: float, foot_flat_frac: float, push_off_frac: float) -> np.ndarray:

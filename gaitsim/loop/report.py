@@ -19,30 +19,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from nav.solution import jsonable  # noqa: E402
+
 from . import attribution as att  # noqa: E402
 from .residuals import CHANNELS, NOISE_LEVEL  # noqa: E402
 
 
-def _clean(o):
-    """JSON-ready copy: numpy to Python, non-finite floats to None."""
-    if isinstance(o, dict):
-        return {str(k): _clean(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_clean(v) for v in o]
-    if isinstance(o, np.ndarray):
-        return _clean(o.tolist())
-    if isinstance(o, (np.floating, float)):
-        return float(o) if math.isfinite(o) else None
-    if isinstance(o, (np.integer,)):
-        return int(o)
-    if isinstance(o, np.bool_):
-        return bool(o)
-    return o
-
-
 def attribution_document(result: att.LoopResult, label: str) -> dict:
     """The content of ``attribution.json`` (module docstring)."""
-    return _clean({
+    return jsonable({
         "recording": label,
         "noise_level": f"|residual| <= {NOISE_LEVEL} x uncertainty",
         "explained_threshold": att.EXPLAINED_FRACTION,

@@ -195,6 +195,19 @@ def _strides(t: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> tuple[np.nd
     return strides, stances[:-1][keep]
 
 
+def phase_resample(t: np.ndarray, x: np.ndarray, strides: np.ndarray, points: int = PHASE_POINTS) -> np.ndarray:
+    """(S, P, ...) the signal ``x`` (N, ...) resampled linearly on ``points`` equal phases of each stride
+    [s0, s1] (sample indices; phase 0 at s0, the last phase one step before s1)."""
+    phase = np.linspace(0.0, 1.0, points, endpoint=False)
+    x = np.asarray(x, float)
+    flat = x.reshape(len(x), -1)
+    out = []
+    for s0, s1 in strides:
+        grid = t[s0] + phase * (t[s1] - t[s0])
+        out.append(np.stack([np.interp(grid, t[s0:s1 + 1], flat[s0:s1 + 1, i]) for i in range(flat.shape[1])], -1))
+    return np.array(out).reshape((len(strides), points) + x.shape[1:])
+
+
 def _mean_se(samples) -> Scalar:
     x = np.asarray(samples, float)
     x = x[np.isfinite(x)]
@@ -323,8 +336,6 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     per = {k: [] for k in ("stance_gyro", "stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_acc_spread", "stance_duration", "stance_shoe", "acc_peak",
                            "gyr_peak", "hf40", "hf80", "onset_hf", "swing_axis_yaw")}
     curves = []
-    phase = np.linspace(0.0, 1.0, PHASE_POINTS, endpoint=False)
-    resampled = {c: [] for c in CHANNELS}
     spectra = []
     n_fft = int(2 ** np.ceil(np.log2(np.median(strides[:, 1] - strides[:, 0]))))
     for (s0, s1), (c0, c1) in zip(strides, stances):
@@ -346,10 +357,6 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
             per["onset_hf"].append(float(np.sqrt(np.mean(high[:max(2, int(ONSET_WINDOW_S * rate))] ** 2))))
         curves.append(_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate))
         per["swing_axis_yaw"].append(_swing_axis_yaw(gyr[s0:s1]))
-        ts = t[s0] + phase * (t[s1] - t[s0])
-        for i, c in enumerate(CHANNELS):
-            x = acc[s0:s1 + 1, i] if i < 3 else np.degrees(gyr[s0:s1 + 1, i - 3])
-            resampled[c].append(np.interp(ts, t[s0:s1 + 1], x))
         seg = acc_norm[s0:s1] - acc_norm[s0:s1].mean()
         spec = np.abs(np.fft.rfft(seg, n_fft)) ** 2
         spectra.append(spec / max(spec[1:].sum(), 1e-30))
@@ -363,9 +370,10 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     scalars["rest_acc_norm"] = Scalar(float(np.linalg.norm(rest_acc.mean(0))),
                                       float(max(norm_samples.std(ddof=1), 1e-4) / math.sqrt(len(rest_acc))),
                                       norm_samples)
+    resampled = phase_resample(t, np.column_stack([acc, np.degrees(gyr)]), strides)  # (S, P, 6), CHANNELS order
     profiles = {}
-    for c in CHANNELS:
-        x = np.array(resampled[c])
+    for i, c in enumerate(CHANNELS):
+        x = resampled[:, :, i]
         profiles[c] = Profile(x.mean(0), x.std(0, ddof=1) / math.sqrt(len(x)), x)
     spectrum = (np.fft.rfftfreq(n_fft, 1.0 / rate), np.mean(spectra, axis=0))
     return Signature(scalars, profiles, strides, stances, rate, spectrum, np.array(curves))
