@@ -6,10 +6,12 @@ import argparse
 import importlib
 import sys
 
+from nav import command as nav_command
+
 from .errors import ScenarioError
 
 # subcommands living in their own modules; each exposes add_parser(subparsers) and run(args) -> int
-PLUGGED = ("gaitsim.nav_command", "gaitsim.experiments.command", "gaitsim.loop.command")
+PLUGGED = ("gaitsim.experiments.command", "gaitsim.loop.command")
 
 
 def _generate(args) -> int:
@@ -36,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--runs", type=int, default=None, help="number of runs (default: the scenario's)")
     gen.add_argument("--force", action="store_true", help="replace an existing output folder")
     gen.set_defaults(func=_generate)
+    nav_command.add_parser(sub)
     for name in PLUGGED:
         try:
             module = importlib.import_module(name)

@@ -22,11 +22,13 @@ per-sample standard deviation sigma every sample at 820 Hz, which is the density
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from collections import namedtuple
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from . import _kernels
+from ._numba import ekf as kernels
+from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES
 from .strapdown import DEFAULT_GRAVITY, mechanisation_inputs, mid_samples
 
 STATE_SIZES = (9, 15, 24)
@@ -95,29 +97,17 @@ class FilterConfig:
             if not getattr(self, name) >= 0:
                 raise ValueError(f"FilterConfig.{name} = {getattr(self, name)} must be >= 0")
 
-    def as_array(self) -> np.ndarray:
-        """The float64 vector the compiled filter reads (indices nav._kernels.CFG_*)."""
-        cfg = np.empty(_kernels.CFG_SIZE)
-        cfg[_kernels.CFG_GRAVITY] = self.gravity
-        cfg[_kernels.CFG_ACC_NOISE] = self.acc_noise_density
-        cfg[_kernels.CFG_GYR_NOISE] = self.gyr_noise_density
-        cfg[_kernels.CFG_ACC_BIAS_RW] = self.acc_bias_random_walk
-        cfg[_kernels.CFG_GYR_BIAS_RW] = self.gyr_bias_random_walk
-        cfg[_kernels.CFG_GSENS_RW] = self.gsens_random_walk
-        cfg[_kernels.CFG_ZUPT_SIGMA] = self.zupt_sigma
-        cfg[_kernels.CFG_ZARU_SIGMA] = self.zaru_sigma
-        cfg[_kernels.CFG_LEVEL_SIGMA] = self.level_sigma
-        cfg[_kernels.CFG_P0_POS] = self.p0_pos
-        cfg[_kernels.CFG_P0_VEL] = self.p0_vel
-        cfg[_kernels.CFG_P0_TILT] = self.p0_tilt
-        cfg[_kernels.CFG_P0_YAW] = self.p0_yaw
-        cfg[_kernels.CFG_P0_ACC_BIAS] = self.p0_acc_bias
-        cfg[_kernels.CFG_P0_GYR_BIAS] = self.p0_gyr_bias
-        cfg[_kernels.CFG_P0_GSENS] = self.p0_gsens
-        return cfg
+    def for_kernel(self) -> "KernelConfig":
+        """The settings as the named tuple the compiled filter reads (nav._numba.ekf), field by field."""
+        return KernelConfig(*(type(f.default)(getattr(self, f.name)) for f in fields(self)))
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+
+# FilterConfig's fields in their order, as a named tuple numba compiles (one type per field: states int, zaru
+# bool, the rest float); adding a field to FilterConfig adds it here
+KernelConfig = namedtuple("KernelConfig", [f.name for f in fields(FilterConfig)])
 
 
 @dataclass
@@ -198,9 +188,9 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
     zaru = stationary if config.zaru else np.zeros(n, bool)
     out = _outputs((n,), config.states)
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
-    out.skipped_updates = _kernels.filter_run(
+    out.skipped_updates = kernels.filter_run(
         mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, int(start), q0,
-        np.asarray(vel0, float), np.asarray(pos0, float), config.states, config.as_array(), bool(rts),
+        np.asarray(vel0, float), np.asarray(pos0, float), config.for_kernel(), bool(rts),
         out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr, out.gsens, out.p_diag)
     return out
 
@@ -225,13 +215,13 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
     t = np.ascontiguousarray(np.broadcast_to(t, (runs, n)))
     stationary = np.ascontiguousarray(np.broadcast_to(np.asarray(stationary, bool), (runs, n)))
     if method == "increments":
-        mode, acc_mid, gyr_mid = _kernels.MODE_INCREMENTS, acc, gyr
+        mode, acc_mid, gyr_mid = MODE_INCREMENTS, acc, gyr
     elif shared_time:  # interpolate every run at once along the common time axis
-        mode = _kernels.MODE_POINT_SAMPLES
+        mode = MODE_POINT_SAMPLES
         acc_mid = np.ascontiguousarray(mid_samples(t[0], acc.transpose(1, 0, 2)).transpose(1, 0, 2))
         gyr_mid = np.ascontiguousarray(mid_samples(t[0], gyr.transpose(1, 0, 2)).transpose(1, 0, 2))
     else:
-        mode = _kernels.MODE_POINT_SAMPLES
+        mode = MODE_POINT_SAMPLES
         acc_mid = np.stack([mid_samples(t[r], acc[r]) for r in range(runs)])
         gyr_mid = np.stack([mid_samples(t[r], gyr[r]) for r in range(runs)])
     pv = None if pseudo_velocity is None else np.asarray(pseudo_velocity, float)
@@ -247,11 +237,10 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
                                                                                np.int64)
     if np.any(start < 0) or np.any(start >= n):
         raise ValueError(f"run_filter_batch: start samples {start} outside 0..{n - 1}")
-    cfg = np.ascontiguousarray(np.broadcast_to(config.as_array(), (runs, _kernels.CFG_SIZE)))
     out = _outputs((runs, n), config.states)
     skipped = np.zeros(runs, np.int64)
-    _kernels.filter_batch(mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, start, q0, vel0, pos0,
-                          config.states, cfg, bool(rts), out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr,
-                          out.gsens, out.p_diag, skipped)
+    kernels.filter_batch(mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, start, q0, vel0, pos0,
+                         config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr,
+                         out.gsens, out.p_diag, skipped)
     out.skipped_updates = skipped
     return out

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels
+from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES, strapdown_run
 
 METHODS = ("rk4", "increments")
 DEFAULT_GRAVITY = 9.81  # m/s^2
@@ -108,7 +108,7 @@ def integrate(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, quat0: np.ndarray
     vel = np.empty((n, 3))
     pos = np.empty((n, 3))
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
-    _kernels.strapdown_run(mode, t, acc, gyr, acc_mid, gyr_mid, 0, q0, np.asarray(vel0, float),
+    strapdown_run(mode, t, acc, gyr, acc_mid, gyr_mid, 0, q0, np.asarray(vel0, float),
                            np.asarray(pos0, float), float(gravity), quat, vel, pos)
     return Trajectory(t=t, quat=quat, vel=vel, pos=pos)
 
@@ -116,5 +116,5 @@ def integrate(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, quat0: np.ndarray
 def mechanisation_inputs(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, method: str):
     """Kernel mode and mid-interval samples for ``method`` (the mid samples are unused for increments)."""
     if method == "increments":
-        return _kernels.MODE_INCREMENTS, acc, gyr
-    return _kernels.MODE_POINT_SAMPLES, mid_samples(t, acc), mid_samples(t, gyr)
+        return MODE_INCREMENTS, acc, gyr
+    return MODE_POINT_SAMPLES, mid_samples(t, acc), mid_samples(t, gyr)

@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from nav import metrics
-from nav.detectors import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW, DETECTORS
-from nav.ekf import STATE_SIZES, FilterConfig
-from nav.pipeline import ALL_CALIBRATION_TERMS, METHODS, NavOptions, navigate, navigate_batch, score_solution
-from nav.recording import atomic_output_dir, list_runs, read_recording
-from nav.solution import write_json, write_solution_into
+from . import metrics
+from .detectors import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW, DETECTORS
+from .ekf import STATE_SIZES, FilterConfig
+from .pipeline import ALL_CALIBRATION_TERMS, METHODS, NavOptions, navigate, navigate_batch, score_solution
+from .recording import atomic_output_dir, list_runs, read_recording
+from .solution import write_json, write_solution_into
 
 _DEFAULT_FILTER = FilterConfig()
 
