@@ -24,6 +24,7 @@ import numba
 import numpy as np
 
 from nav import detectors
+from nav.constants import DEFAULT_GRAVITY
 from nav.alignment import align
 from nav.ekf import FilterConfig, run_filter, run_filter_batch
 from nav.recording import Recording
@@ -49,7 +50,7 @@ def synthetic_recording(duration=75.0, fs=800.0, seed=0) -> Recording:
     phase = np.clip(t - 2.0, 0, None) % 1.43 / 1.43
     swing = (t > 2.0) & (phase > 0.4)
     shape = np.where(swing, np.sin(2 * np.pi * (phase - 0.4) / 0.6), 0.0)[:, None]
-    acc = np.array([0.0, 0.0, 9.81]) + shape * [20.0, 1.0, 15.0] + rng.normal(0, 0.02, (len(t), 3))
+    acc = np.array([0.0, 0.0, DEFAULT_GRAVITY]) + shape * [20.0, 1.0, 15.0] + rng.normal(0, 0.02, (len(t), 3))
     gyr = shape * [0.5, 6.0, 0.3] + rng.normal(0, 0.003, (len(t), 3))
     return Recording(t=t, acc=acc, gyr=gyr)
 

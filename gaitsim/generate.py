@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nav.recording import Recording, atomic_output_dir, write_recording_into
+from nav.files import atomic_output_dir
+from nav.recording import Recording, write_recording_into
 
 from .scenario import Scenario
 from .truth import simulate_walk

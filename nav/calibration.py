@@ -21,18 +21,18 @@ Terms are grouped for ablations: ``"bias"`` (b_a, b_g), ``"misalignment"`` (M_a,
 ``"g_sensitivity"`` (G_g, G2_g). A group left out of ``terms`` is treated as absent (zero bias, identity
 matrix, zero sensitivity).
 
-This module is part of ``nav`` and imports only numpy, json and the standard library.
+This module is part of ``nav`` and imports only numpy, json, the standard library and nav.files.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from .files import write_text_atomic
 
 TERM_GROUPS = ("bias", "misalignment", "g_sensitivity")
 
@@ -220,18 +220,7 @@ def save_calibration(cal: Calibration, path: str | Path) -> Path:
     -------
     The path written.
     """
-    path = Path(path)
-    text = json.dumps(_to_json(cal), indent=2)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text + "\n")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-    return path
+    return write_text_atomic(path, json.dumps(_to_json(cal), indent=2) + "\n")
 
 
 def load_calibration(path: str | Path) -> Calibration:

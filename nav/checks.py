@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .constants import DEFAULT_GRAVITY
 from .recording import Recording, RecordingError
 
 STATIC_WINDOW_S = 0.5  # s, length of the quietest window used for the unit checks
@@ -25,7 +26,7 @@ ACC_IN_G_BAND = (0.8, 1.25)  # |f| at rest, if it lies here the accelerometer re
 GRAVITY_TOLERANCE = 0.1  # relative deviation of the static |f| from gravity that triggers a warning
 JITTER_TOLERANCE = 0.2  # relative deviation of an interval from the median interval counted as irregular
 CLIP_MIN_COUNT = 3  # samples at a column's extreme value that count as possible clipping
-CLIP_MIN_LEVEL = {"acc": 2 * 9.81, "gyr": 5.0}  # m/s^2, rad/s: extremes below these are not a sensor range
+CLIP_MIN_LEVEL = {"acc": 2 * DEFAULT_GRAVITY, "gyr": 5.0}  # m/s^2, rad/s: extremes below these are not a sensor range
 
 
 @dataclass
@@ -87,7 +88,7 @@ def quietest_window(acc: np.ndarray, length: int) -> tuple[int, int]:
     return start, start + length
 
 
-def check_recording(rec: Recording, gravity: float = 9.81, name: str = "imu.csv") -> CheckReport:
+def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str = "imu.csv") -> CheckReport:
     """Check a recording before navigation.
 
     Parameters

@@ -11,11 +11,13 @@ import math
 from pathlib import Path
 
 from . import metrics
-from .detectors import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW, DETECTORS
+from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
+from .detectors import DETECTORS
 from .ekf import STATE_SIZES, FilterConfig
 from .pipeline import ALL_CALIBRATION_TERMS, METHODS, NavOptions, navigate, navigate_batch, score_solution
-from .recording import atomic_output_dir, list_runs, read_recording
-from .solution import write_json, write_solution_into
+from .files import atomic_output_dir, write_json
+from .recording import list_runs, read_recording
+from .solution import write_solution_into
 
 _DEFAULT_FILTER = FilterConfig()
 

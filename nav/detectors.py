@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .constants import DEFAULT_GRAVITY, DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
+
 DETECTORS = ("shoe", "are", "mv", "mag", "oracle")
 SLIDING = "sliding window, step 1; all W samples of a window below the threshold are stationary (OpenShoe)"
 BLOCKS = "non-overlapping blocks of W samples; a block below the threshold is stationary (pyshoe)"
@@ -56,7 +58,7 @@ class DetectorParams:
     sigma_g: float
     window: int
     fs: float
-    gravity: float = 9.81
+    gravity: float = DEFAULT_GRAVITY
     semantics: str = SLIDING
 
     def as_dict(self) -> dict:
@@ -67,13 +69,6 @@ class DetectorParams:
             "window_s": self.window / self.fs, "fs_hz": self.fs, "gravity_m_s2": self.gravity,
             "window_semantics": self.semantics,
         }
-
-
-# OpenShoe's defaults (anchors §2): sigma_a 0.01 m/s^2, sigma_g 0.1 deg/s, W = 3, gamma = 3e4.
-DEFAULT_SIGMA_A = 0.01  # m/s^2
-DEFAULT_SIGMA_G = math.radians(0.1)  # rad/s
-DEFAULT_WINDOW = 3  # samples
-DEFAULT_THRESHOLD = 3e4
 
 
 @dataclass(frozen=True)
@@ -112,7 +107,7 @@ def _spread_marks(below: np.ndarray, window: int) -> np.ndarray:
 
 
 def statistic(name: str, acc: np.ndarray, gyr: np.ndarray, sigma_a: float, sigma_g: float, window: int,
-              gravity: float = 9.81) -> np.ndarray:
+              gravity: float = DEFAULT_GRAVITY) -> np.ndarray:
     """Detector statistic T(k) for every window start k.
 
     Parameters
@@ -162,7 +157,7 @@ def sample_rate(t: np.ndarray) -> float:
 
 def detect(name: str, t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, threshold: float = DEFAULT_THRESHOLD,
            sigma_a: float = DEFAULT_SIGMA_A, sigma_g: float = DEFAULT_SIGMA_G, window: int = DEFAULT_WINDOW,
-           gravity: float = 9.81) -> DetectorResult:
+           gravity: float = DEFAULT_GRAVITY) -> DetectorResult:
     """Run a statistical detector with OpenShoe's sliding-window semantics.
 
     Parameters

@@ -29,7 +29,8 @@ import numpy as np
 
 from ._numba import ekf as kernels
 from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES
-from .strapdown import DEFAULT_GRAVITY, mechanisation_inputs, mid_samples
+from .constants import DEFAULT_GRAVITY
+from .strapdown import mechanisation_inputs, mid_samples
 
 STATE_SIZES = (9, 15, 24)
 OPENSHOE_RATE_HZ = 820.0  # the sample rate at which OpenShoe's per-sample noise values are converted

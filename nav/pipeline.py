@@ -20,6 +20,7 @@ import numpy as np
 from . import detectors, metrics
 from .alignment import DEFAULT_MIN_SAMPLES, align, first_leg_direction, yaw_of
 from .checks import check_recording, check_stance_found
+from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .ekf import FilterConfig, FilterOutput, run_filter, run_filter_batch
 from .recording import Recording, RecordingError
 from .solution import Solution
@@ -47,16 +48,15 @@ class NavOptions:
         (nav.zupt_velocity), a path to a model JSON, or an (N, 3) array (m/s, heading frame): step 2.
     rts : RTS-smooth the solution.
     heading : rad, initial heading of the body x axis counter-clockwise from east; None: see the module docstring.
-    gravity : m/s^2; None: the recording's ``meta["sampling"]["gravity_mps2"]`` if present, else
-        ``filter.gravity``.
+    gravity : m/s^2; None: the recording's (``Recording.gravity``). It replaces ``filter.gravity``.
     align_min_samples : shortest stationary window accepted for the alignment, samples.
     """
 
     detector: str = "shoe"
-    threshold: float = detectors.DEFAULT_THRESHOLD
-    sigma_a: float = detectors.DEFAULT_SIGMA_A
-    sigma_g: float = detectors.DEFAULT_SIGMA_G
-    window: int = detectors.DEFAULT_WINDOW
+    threshold: float = DEFAULT_THRESHOLD
+    sigma_a: float = DEFAULT_SIGMA_A
+    sigma_g: float = DEFAULT_SIGMA_G
+    window: int = DEFAULT_WINDOW
     filter: FilterConfig = field(default_factory=FilterConfig)
     method: str = "auto"
     calibration: object = None
@@ -92,9 +92,7 @@ class _Prepared:
 
 
 def _gravity(rec: Recording, options: NavOptions) -> float:
-    if options.gravity is not None:
-        return float(options.gravity)
-    return float(rec.meta.get("sampling", {}).get("gravity_mps2", options.filter.gravity))
+    return float(options.gravity) if options.gravity is not None else rec.gravity
 
 
 def _calibrate(rec: Recording, options: NavOptions) -> tuple[np.ndarray, np.ndarray, dict]:

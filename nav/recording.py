@@ -26,13 +26,13 @@ This module belongs to ``nav`` so that the filter can read any recording without
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .constants import DEFAULT_GRAVITY
+from .files import atomic_output_dir
 
 SCHEMA_VERSION = 1
 
@@ -156,6 +156,11 @@ class Recording:
     def n(self) -> int:
         return len(self.t)
 
+    @property
+    def gravity(self) -> float:
+        """m/s^2, the world's gravity magnitude: ``meta["sampling"]["gravity_mps2"]``, else DEFAULT_GRAVITY."""
+        return float(self.meta.get("sampling", {}).get("gravity_mps2", DEFAULT_GRAVITY))
+
 
 def _write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
     # %.17g round-trips float64 exactly
@@ -171,46 +176,6 @@ def _read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
     if table.shape[1] != len(header):
         raise RecordingError(f"{path}: {table.shape[1]} columns, expected {len(header)}")
     return table
-
-
-def _atomic_dir(target: Path, overwrite: bool):
-    """Context-free helper: make a temporary sibling folder that :func:`_commit_dir` renames into place."""
-    target = Path(target)
-    if target.exists() and any(target.iterdir()) and not overwrite:
-        raise FileExistsError(f"{target}: output folder exists and is not empty (pass overwrite=True / --force)")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    return Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
-
-
-def commit_dir(tmp: Path, target: Path) -> None:
-    """Move a finished temporary folder into place; an older ``target`` is replaced only now."""
-    target = Path(target)
-    if target.exists():
-        old = target.with_name(f".{target.name}.old-{os.getpid()}")
-        os.replace(target, old)
-        os.replace(tmp, target)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(tmp, target)
-
-
-class atomic_output_dir:
-    """``with atomic_output_dir(DIR) as tmp:`` write into ``tmp``; it becomes DIR only if the block succeeds."""
-
-    def __init__(self, target: str | Path, overwrite: bool = False):
-        self.target = Path(target)
-        self.overwrite = overwrite
-
-    def __enter__(self) -> Path:
-        self.tmp = _atomic_dir(self.target, self.overwrite)
-        return self.tmp
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            commit_dir(self.tmp, self.target)
-        else:
-            shutil.rmtree(self.tmp, ignore_errors=True)
-        return False
 
 
 def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> None:

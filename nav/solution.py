@@ -7,14 +7,12 @@ navigation start (the first stationary window) are omitted.
 
 from __future__ import annotations
 
-import json
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .recording import atomic_output_dir
+from .files import atomic_output_dir, write_json
 
 SOLUTION_COLUMNS = ("t", "pos_x", "pos_y", "pos_z", "vel_x", "vel_y", "vel_z", "q_w", "q_x", "q_y", "q_z", "zupt")
 
@@ -52,35 +50,12 @@ class Solution:
         return np.column_stack([self.t[s], self.pos[s], self.vel[s], self.quat[s], self.stationary[s].astype(float)])
 
 
-def jsonable(o):
-    """JSON-ready copy: numpy to Python, non-finite floats to None."""
-    if isinstance(o, dict):
-        return {str(k): jsonable(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [jsonable(v) for v in o]
-    if isinstance(o, np.ndarray):
-        return jsonable(o.tolist())
-    if isinstance(o, (np.floating, float)):
-        return None if not math.isfinite(float(o)) else float(o)
-    if isinstance(o, (np.integer,)):
-        return int(o)
-    if isinstance(o, np.bool_):
-        return bool(o)
-    return o
-
-
 def write_solution_into(folder: Path, solution: Solution, score: dict) -> None:
     """Write ``solution.csv`` and ``score.json`` into an existing (temporary) folder; prefer write_solution."""
     folder = Path(folder)
     np.savetxt(folder / "solution.csv", solution.table(), delimiter=",", header=",".join(SOLUTION_COLUMNS),
                comments="", fmt="%.17g")
     write_json(folder / "score.json", score)
-
-
-def write_json(path: Path, doc: dict) -> None:
-    """JSON with non-finite numbers written as null and numpy values as plain numbers."""
-    with open(path, "w") as fh:
-        json.dump(jsonable(doc), fh, indent=2, sort_keys=True)
 
 
 def write_solution(folder: str | Path, solution: Solution, score: dict, overwrite: bool = False) -> Path:

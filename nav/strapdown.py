@@ -20,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .constants import DEFAULT_GRAVITY
 from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES, strapdown_run
 
 METHODS = ("rk4", "increments")
-DEFAULT_GRAVITY = 9.81  # m/s^2
 
 
 def mid_samples(t: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .alignment import stationary_runs, yaw_of
+from .files import write_text_atomic
 
 MODEL_FORMAT = "nav.stance_velocity/1"
 
@@ -146,12 +147,7 @@ class StanceVelocityProfile:
 
 def save_stance_velocity(model, path: str | Path) -> Path:
     """Write a model as JSON (atomically: a temporary file renamed into place)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "w") as fh:
-        json.dump(model.to_json(), fh, indent=2, default=float)
-    tmp.replace(path)
-    return path
+    return write_text_atomic(path, json.dumps(model.to_json(), indent=2, default=float))
 
 
 def load_stance_velocity(path: str | Path):

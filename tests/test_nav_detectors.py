@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from nav import detectors as D
+from nav.constants import DEFAULT_SIGMA_A
 
 G = 9.81
 
@@ -64,7 +65,7 @@ def test_all_w_samples_of_a_quiet_window_are_marked():
     acc = np.tile([0.0, 0.0, G], (n, 1))
     res = D.detect("are", t, acc, gyr, threshold=1.0, sigma_g=0.1, window=w)
     assert np.flatnonzero(res.stationary).tolist() == [10, 11, 12, 13]
-    assert res.params == D.DetectorParams("are", 1.0, D.DEFAULT_SIGMA_A, 0.1, w, pytest.approx(100.0), G)
+    assert res.params == D.DetectorParams("are", 1.0, DEFAULT_SIGMA_A, 0.1, w, pytest.approx(100.0), G)
 
 
 def test_batch_detection_equals_single_runs():

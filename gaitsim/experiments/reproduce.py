@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from nav.metrics import summarise_runs
-from nav.solution import write_json
+from nav.files import write_json
 
 from ..runner import run_tasks
 from ..scenario import load_scenario, scenario_from_dict

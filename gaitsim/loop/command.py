@@ -16,8 +16,8 @@ import time
 import warnings
 from pathlib import Path
 
-from nav.recording import RecordingError, atomic_output_dir, list_runs, read_recording
-from nav.solution import jsonable
+from nav.files import atomic_output_dir, jsonable
+from nav.recording import RecordingError, list_runs, read_recording
 
 from . import attribution, blind, report
 

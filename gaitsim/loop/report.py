@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from nav.solution import jsonable  # noqa: E402
+from nav.files import jsonable  # noqa: E402
 
 from . import attribution as att  # noqa: E402
 from .residuals import CHANNELS, NOISE_LEVEL  # noqa: E402
