@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from .alignment import stationary_runs
+from .series import resample
 
 TRACK_DIRECTION_MIN_DISTANCE = 2.0  # m, points closer to the start give no usable track direction
 LOOP_DISTANCE = 1.0  # m, below this start->end distance the along/perpendicular axes are undefined
@@ -39,7 +40,7 @@ PATH_SAMPLE_INTERVAL = 0.25  # s, spacing of the polyline used for path lengths
 def _path_length(t: np.ndarray, pos: np.ndarray) -> float:
     grid = np.arange(t[0], t[-1], PATH_SAMPLE_INTERVAL)
     grid = np.append(grid, t[-1])
-    xy = np.stack([np.interp(grid, t, pos[:, i]) for i in range(2)], -1)
+    xy = resample(grid, t, pos[:, :2])
     return float(np.sum(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
 
 
@@ -143,8 +144,8 @@ def stride_length_ratio(t: np.ndarray, pos: np.ndarray, stationary: np.ndarray, 
     middles = middles[ok]
     if len(middles) < 2:
         return math.nan
-    est = np.stack([np.interp(middles, t, pos[:, i]) for i in range(2)], -1)
-    ref = np.stack([np.interp(middles, ref_t, ref_pos[:, i]) for i in range(2)], -1)
+    est = resample(middles, t, pos[:, :2])
+    ref = resample(middles, ref_t, ref_pos[:, :2])
     ref_length = float(np.sum(np.linalg.norm(np.diff(ref, axis=0), axis=1)))
     return float(np.sum(np.linalg.norm(np.diff(est, axis=0), axis=1))) / ref_length if ref_length > 0 else math.nan
 
@@ -174,7 +175,7 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
     rt, rp = ref_t[rok], ref_pos[rok]
     if len(rt) < 2:
         raise ValueError("score: the reference does not overlap the navigated time span")
-    ep = np.stack([np.interp(rt, t_est, p_est[:, i]) for i in range(3)], -1)
+    ep = resample(rt, t_est, p_est)
     out = end_point_errors(ep[-1], rp[0], rp[-1])
     duration = float(rt[-1] - rt[0])
     path = _path_length(rt, rp)
