@@ -14,7 +14,8 @@ from . import metrics
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .detectors import DETECTORS
 from .ekf import STATE_SIZES, FilterConfig
-from .pipeline import ALL_CALIBRATION_TERMS, METHODS, NavOptions, navigate, navigate_batch, score_solution
+from .pipeline import METHODS, NavOptions, navigate, score_solution
+from .calibration import TERM_GROUPS
 from .files import atomic_output_dir, write_json
 from .recording import list_runs, read_recording
 from .solution import write_solution_into
@@ -33,7 +34,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD, help="detector threshold (default 3e4)")
     p.add_argument("--sigma-a", type=float, default=DEFAULT_SIGMA_A,
                    help="detector accelerometer sigma, m/s^2 (default 0.01)")
-    p.add_argument("--sigma-g", type=float, default=math.degrees(DEFAULT_SIGMA_G),
+    p.add_argument("--sigma-g-dps", type=float, default=math.degrees(DEFAULT_SIGMA_G),
                    help="detector gyro sigma, deg/s (default 0.1; converted to rad/s)")
     p.add_argument("--window", type=int, default=DEFAULT_WINDOW, help="detector window, samples (default 3)")
     p.add_argument("--states", type=int, choices=STATE_SIZES, default=_DEFAULT_FILTER.states,
@@ -48,10 +49,10 @@ def add_parser(subparsers) -> None:
                    help="initial heading, deg counter-clockwise from east (default: from truth/reference, else 0)")
     p.add_argument("--gravity", type=float, default=None, help="gravity, m/s^2 (default: meta.json, else 9.81)")
     p.add_argument("--calibration", default=None, help="calibration file applied before mechanisation (step 1)")
-    p.add_argument("--calibration-terms", default=",".join(ALL_CALIBRATION_TERMS),
+    p.add_argument("--calibration-terms", default=",".join(TERM_GROUPS),
                    help="comma-separated terms of the calibration to apply (default all)")
     p.add_argument("--stance-velocity", default=None,
-                   help="stance pseudo-velocity model JSON (step 2; default zero velocity)")
+                   help="stance velocity model JSON (step 2; default zero velocity)")
     p.add_argument("--rts", action="store_true", help="RTS-smooth the solution")
     p.set_defaults(func=run)
 
@@ -61,7 +62,7 @@ def options_from_args(args) -> NavOptions:
     cfg = FilterConfig(states=args.states, zupt_sigma=args.zupt_sigma, zaru=args.zaru, level_sigma=args.level_sigma)
     terms = tuple(x.strip() for x in args.calibration_terms.split(",") if x.strip())
     return NavOptions(
-        detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g),
+        detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g_dps),
         window=args.window, filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,
         heading=None if args.heading_deg is None else math.radians(args.heading_deg), gravity=args.gravity,
@@ -80,12 +81,7 @@ def run(args) -> int:
     options = options_from_args(args)
     folders = list_runs(args.recording)
     recs = [read_recording(f) for f in folders]
-    if len(recs) == 1:
-        solutions = [navigate(recs[0], options)]
-    elif len({r.n for r in recs}) == 1:
-        solutions = navigate_batch(recs, options)
-    else:
-        solutions = [navigate(r, options) for r in recs]
+    solutions = navigate(recs, options)
     scores = [score_solution(r, s) for r, s in zip(recs, solutions)]
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
         if len(recs) == 1:

@@ -10,8 +10,9 @@ Bancroft & Lachapelle) -- 24.
   the sample interval, so results do not depend on the sample rate through the noise model).
 - Updates: Joseph form ``(I-KH) P (I-KH)^T + K R K^T``, symmetrised; each correction is injected into the
   nominal state at once (closed loop).
-- ZUPT: the pseudo-measurement "velocity = v_pseudo" with v_pseudo given per sample in the foot's heading frame
-  (x along the foot's horizontal heading, z up; rotated by the current yaw estimate). Zero by default.
+- ZUPT: the pseudo-measurement "velocity = stance velocity", the stance velocity given per sample in the foot's
+  heading frame (x along the foot's horizontal heading, z up; rotated by the current yaw estimate). Zero by
+  default.
 - Optional: zero angular-rate update (needs the gyro bias states), level-walking height constraint at ZUPTs
   (off unless asked), RTS smoother over the whole recording (state only; memory N * n^2 * 8 bytes).
 
@@ -134,6 +135,11 @@ class FilterOutput:
     p_diag: np.ndarray
     skipped_updates: int | np.ndarray
 
+    def of_run(self, r: int) -> "FilterOutput":
+        """The estimates of run ``r`` of a batch output (views, no copy)."""
+        return FilterOutput(self.quat[r], self.vel[r], self.pos[r], self.bias_acc[r], self.bias_gyr[r],
+                            self.gsens[r], self.p_diag[r], self.skipped_updates[r])
+
 
 def _outputs(shape: tuple[int, ...], states: int) -> FilterOutput:
     def nans(*tail):
@@ -142,18 +148,18 @@ def _outputs(shape: tuple[int, ...], states: int) -> FilterOutput:
     return FilterOutput(nans(4), nans(3), nans(3), nans(3), nans(3), nans(9), nans(states), 0)
 
 
-def _per_sample_heading_velocity(pseudo_velocity, shape: tuple[int, ...]) -> np.ndarray:
-    if pseudo_velocity is None:
+def _per_sample_stance_velocity(stance_velocity, shape: tuple[int, ...]) -> np.ndarray:
+    if stance_velocity is None:
         return np.zeros(shape + (3,))
-    v = np.ascontiguousarray(np.broadcast_to(np.asarray(pseudo_velocity, float), shape + (3,)))
+    v = np.ascontiguousarray(np.broadcast_to(np.asarray(stance_velocity, float), shape + (3,)))
     if not np.all(np.isfinite(v)):
-        raise ValueError("ZUPT pseudo-velocity contains NaN or inf values")
+        raise ValueError("stance_velocity (the ZUPT's velocity) contains NaN or inf values")
     return v
 
 
 def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
                vel0=(0.0, 0.0, 0.0), pos0=(0.0, 0.0, 0.0), start: int = 0, config: FilterConfig = FilterConfig(),
-               method: str = "rk4", pseudo_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
+               method: str = "rk4", stance_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
     """Run the ZUPT-aided EKF over one recording.
 
     Parameters
@@ -166,7 +172,7 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
     start : index of the first navigated sample (earlier rows of the output are NaN).
     config : FilterConfig.
     method : "rk4" (point samples) or "increments" (exact dv, dth; see nav.strapdown).
-    pseudo_velocity : None (zero), a (3,) constant or an (N, 3) per-sample velocity in m/s in the foot's
+    stance_velocity : None (zero), a (3,) constant or an (N, 3) per-sample velocity in m/s in the foot's
         heading frame (x forward along the horizontal heading, y left, z up), used at stationary samples.
     rts : smooth the state with an RTS pass after the forward filter.
 
@@ -185,12 +191,12 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
     if not 0 <= start < n:
         raise ValueError(f"run_filter: start sample {start} outside 0..{n - 1}")
     mode, acc_mid, gyr_mid = mechanisation_inputs(t, acc, gyr, method)
-    v_heading = _per_sample_heading_velocity(pseudo_velocity, (n,))
+    stance_velocity = _per_sample_stance_velocity(stance_velocity, (n,))
     zaru = stationary if config.zaru else np.zeros(n, bool)
     out = _outputs((n,), config.states)
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
     out.skipped_updates = kernels.filter_run(
-        mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, int(start), q0,
+        mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, stance_velocity, int(start), q0,
         np.asarray(vel0, float), np.asarray(pos0, float), config.for_kernel(), bool(rts),
         out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr, out.gsens, out.p_diag)
     return out
@@ -198,12 +204,12 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
 
 def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
                      vel0=None, pos0=None, start=None, config: FilterConfig = FilterConfig(), method: str = "rk4",
-                     pseudo_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
+                     stance_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
     """Run the filter over R recordings of N samples each in one compiled call (runs spread over cores).
 
     Same parameters as :func:`run_filter` with a leading run axis: t (R, N) or (N,) shared, acc and gyr
     (R, N, 3), stationary (R, N), quat0 (R, 4), vel0 and pos0 (R, 3) (default zero), start (R,) (default 0),
-    pseudo_velocity None, (3,), (R, 3) or (R, N, 3). Results equal :func:`run_filter` on each run (same compiled
+    stance_velocity None, (3,), (R, 3) or (R, N, 3). Results equal :func:`run_filter` on each run (same compiled
     code per run).
     """
     acc = np.ascontiguousarray(acc, float)
@@ -225,10 +231,9 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
         mode = MODE_POINT_SAMPLES
         acc_mid = np.stack([mid_samples(t[r], acc[r]) for r in range(runs)])
         gyr_mid = np.stack([mid_samples(t[r], gyr[r]) for r in range(runs)])
-    pv = None if pseudo_velocity is None else np.asarray(pseudo_velocity, float)
-    if pv is not None and pv.ndim == 2:
-        pv = pv[:, None, :]
-    v_heading = _per_sample_heading_velocity(pv, (runs, n))
+    if stance_velocity is not None and np.ndim(stance_velocity) == 2:  # one constant per run
+        stance_velocity = np.asarray(stance_velocity, float)[:, None, :]
+    stance_velocity = _per_sample_stance_velocity(stance_velocity, (runs, n))
     zaru = stationary if config.zaru else np.zeros((runs, n), bool)
     q0 = np.asarray(quat0, float).reshape(runs, 4)
     q0 = np.ascontiguousarray(q0 / np.linalg.norm(q0, axis=1, keepdims=True))
@@ -240,8 +245,8 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
         raise ValueError(f"run_filter_batch: start samples {start} outside 0..{n - 1}")
     out = _outputs((runs, n), config.states)
     skipped = np.zeros(runs, np.int64)
-    kernels.filter_batch(mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, v_heading, start, q0, vel0, pos0,
-                         config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr,
+    kernels.filter_batch(mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, stance_velocity, start, q0, vel0,
+                         pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr,
                          out.gsens, out.p_diag, skipped)
     out.skipped_updates = skipped
     return out

@@ -1,33 +1,46 @@
-"""One call from a recording to a navigation solution and its score.
+"""One call from recordings to navigation solutions and their scores.
 
 Steps: check the input (nav.checks) -> compensation step 1, readout calibration (optional) -> zero-velocity
 detection -> alignment on the first stationary window -> ZUPT-aided EKF with compensation step 2, the stance
-pseudo-velocity (optional) -> scores against truth or the recording's reference.
+velocity (optional) -> scores against truth or the recording's reference.
 
-Heading: given (``NavOptions.heading``), else the true heading at the start when the recording has truth, else
-the direction that makes the solution's first leg (first 3 m) point along the reference's first leg (found with
-a first pass at heading 0), else 0.
+Heading (:class:`HeadingSource`): given (``NavOptions.heading``), else the true heading at the start when the
+recording has truth, else the direction that makes the solution's first leg (first 3 m) point along the
+reference's first leg (found with a first pass at heading 0), else 0.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from enum import Enum
 from pathlib import Path
 
 import numpy as np
 
 from . import detectors, metrics
+from . import quaternion as quat
 from .alignment import DEFAULT_MIN_SAMPLES, align, first_leg_direction, yaw_of
+from .calibration import TERM_GROUPS, load_calibration
 from .checks import check_recording, check_stance_found
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .ekf import FilterConfig, FilterOutput, run_filter, run_filter_batch
 from .recording import Recording, RecordingError
+from .series import resample
 from .solution import Solution
+from .strapdown import METHODS as STRAPDOWN_METHODS
 from .zupt_velocity import load_stance_velocity
 
-METHODS = ("auto", "rk4", "increments")
-ALL_CALIBRATION_TERMS = ("bias", "misalignment", "g_sensitivity")
+METHODS = ("auto",) + STRAPDOWN_METHODS
+
+
+class HeadingSource(Enum):
+    """Where the initial heading comes from; the value is what ``info["alignment"]["heading_source"]`` says."""
+
+    GIVEN = "given"
+    TRUTH = "truth at the start"
+    REFERENCE_FIRST_LEG = "reference first leg"
+    DEFAULT = "default 0 (no truth or reference)"
 
 
 @dataclass(frozen=True)
@@ -44,8 +57,8 @@ class NavOptions:
         applied, else "rk4"), "rk4" or "increments".
     calibration : None, a Calibration (nav.calibration) or a path to a calibration file: step 1.
     calibration_terms : which terms of it to apply.
-    stance_velocity : None (zero pseudo-velocity), a model with ``heading_velocity(stationary) -> (N, 3)``
-        (nav.zupt_velocity), a path to a model JSON, or an (N, 3) array (m/s, heading frame): step 2.
+    stance_velocity : None (zero), a model with ``stance_velocity(stationary) -> (N, 3)`` (nav.zupt_velocity), a
+        path to a model JSON, or an (N, 3) array (m/s, heading frame): step 2.
     rts : RTS-smooth the solution.
     heading : rad, initial heading of the body x axis counter-clockwise from east; None: see the module docstring.
     gravity : m/s^2; None: the recording's (``Recording.gravity``). It replaces ``filter.gravity``.
@@ -60,7 +73,7 @@ class NavOptions:
     filter: FilterConfig = field(default_factory=FilterConfig)
     method: str = "auto"
     calibration: object = None
-    calibration_terms: tuple = ALL_CALIBRATION_TERMS
+    calibration_terms: tuple = TERM_GROUPS
     stance_velocity: object = None
     rts: bool = False
     heading: float | None = None
@@ -75,8 +88,21 @@ class NavOptions:
 
 
 @dataclass
-class _Prepared:
-    """One recording made ready for the filter."""
+class PreparedRecording:
+    """One recording made ready for the filter (:func:`prepare`).
+
+    Attributes
+    ----------
+    t : (N,) s; acc, gyr : (N, 3) what the filter integrates (m/s^2 and rad/s, or the truth's increments m/s
+        and rad when ``method`` is "increments").
+    stationary : (N,) bool, detected stance (the ZUPT samples).
+    method : "rk4" or "increments".
+    start : first navigated sample; quat0 : (4,) attitude there at the heading of ``heading_source`` (0 for
+        the reference's first leg, turned after a first pass); pos0 : (3,) m.
+    stance_velocity : (N, 3) m/s, heading frame, the ZUPT's velocity per sample.
+    heading_source : HeadingSource.
+    info : dict, what the solution's ``info`` reports.
+    """
 
     t: np.ndarray
     acc: np.ndarray
@@ -86,8 +112,8 @@ class _Prepared:
     start: int
     quat0: np.ndarray
     pos0: np.ndarray
-    pseudo_velocity: np.ndarray
-    heading_source: str
+    stance_velocity: np.ndarray
+    heading_source: HeadingSource
     info: dict
 
 
@@ -98,8 +124,6 @@ def _gravity(rec: Recording, options: NavOptions) -> float:
 def _calibrate(rec: Recording, options: NavOptions) -> tuple[np.ndarray, np.ndarray, dict]:
     if options.calibration is None:
         return np.asarray(rec.acc, float), np.asarray(rec.gyr, float), {"applied": False}
-    from .calibration import load_calibration
-
     cal = options.calibration
     source = str(cal) if isinstance(cal, (str, Path)) else getattr(cal, "source", "")
     if isinstance(cal, (str, Path)):
@@ -132,25 +156,48 @@ def _method(rec: Recording, options: NavOptions, calibrated: bool) -> str:
     return options.method
 
 
-def _pseudo_velocity(options: NavOptions, stationary: np.ndarray) -> tuple[np.ndarray, str]:
-    model = options.stance_velocity
-    if model is None:
+def _stance_velocity(options: NavOptions, stationary: np.ndarray) -> tuple[np.ndarray, str]:
+    """(N, 3) m/s stance velocity per sample and a description of where it came from."""
+    source = options.stance_velocity
+    if source is None:
         return np.zeros((len(stationary), 3)), "zero"
-    if isinstance(model, (str, Path)):
-        description = f"model file {model}"
-        model = load_stance_velocity(model)
-    elif isinstance(model, np.ndarray):
-        if model.shape != (len(stationary), 3):
-            raise ValueError(f"NavOptions.stance_velocity array has shape {model.shape}; "
+    if isinstance(source, (str, Path)):
+        description = f"model file {source}"
+        source = load_stance_velocity(source)
+    elif isinstance(source, np.ndarray):
+        if source.shape != (len(stationary), 3):
+            raise ValueError(f"NavOptions.stance_velocity array has shape {source.shape}; "
                              f"expected ({len(stationary)}, 3)")
-        return np.asarray(model, float), "per-sample array"
+        return np.asarray(source, float), "per-sample array"
     else:
-        description = type(model).__name__
-    return model.heading_velocity(stationary), description
+        description = type(source).__name__
+    return source.stance_velocity(stationary), description
 
 
-def prepare(rec: Recording, options: NavOptions = NavOptions()) -> _Prepared:
-    """Checks, calibration, detection, alignment and pseudo-velocity of one recording (no filtering)."""
+def _initial_heading(rec: Recording, options: NavOptions, start: int) -> tuple[float, HeadingSource]:
+    """Heading (rad) for the alignment and where it comes from (0 for the reference's first leg: turned later)."""
+    if options.heading is not None:
+        return float(options.heading), HeadingSource.GIVEN
+    if rec.truth is not None:
+        return float(yaw_of(rec.truth.quat[start])), HeadingSource.TRUTH
+    if rec.reference is not None:
+        return 0.0, HeadingSource.REFERENCE_FIRST_LEG
+    return 0.0, HeadingSource.DEFAULT
+
+
+def _initial_position(rec: Recording, start: int) -> np.ndarray:
+    """(3,) m, the truth's or the reference's position at the start sample, else the origin."""
+    if rec.truth is not None:
+        return np.asarray(rec.truth.pos[start], float)
+    if rec.reference is not None:
+        ref = rec.reference
+        ok = np.all(np.isfinite(ref.pos), axis=1)
+        return resample(rec.t[start], ref.t[ok], ref.pos[ok])
+    return np.zeros(3)
+
+
+def prepare(rec: Recording, options: NavOptions = NavOptions()) -> PreparedRecording:
+    """Checks, calibration, detection, alignment and stance velocity of one recording (no filtering)."""
     gravity = _gravity(rec, options)
     report = check_recording(rec, gravity)
     acc, gyr, cal_info = _calibrate(rec, options)
@@ -158,26 +205,10 @@ def prepare(rec: Recording, options: NavOptions = NavOptions()) -> _Prepared:
     check_stance_found(result.stationary, str(result.params.as_dict()),
                        float(result.statistic.min()) if result.statistic.size else math.nan)
     method = _method(rec, options, cal_info["applied"])
-    alignment = align(acc, result.stationary, 0.0, options.align_min_samples)
-    start = alignment.start
-    if options.heading is not None:
-        yaw, heading_source = float(options.heading), "given"
-    elif rec.truth is not None:
-        yaw, heading_source = float(yaw_of(rec.truth.quat[start])), "truth at the start"
-    elif rec.reference is not None:
-        yaw, heading_source = 0.0, "reference first leg"
-    else:
-        yaw, heading_source = 0.0, "default 0 (no truth or reference)"
+    start = align(acc, result.stationary, 0.0, options.align_min_samples).start
+    yaw, heading_source = _initial_heading(rec, options, start)
     alignment = align(acc, result.stationary, yaw, options.align_min_samples)
-    if rec.truth is not None:
-        pos0 = np.asarray(rec.truth.pos[start], float)
-    elif rec.reference is not None:
-        ref = rec.reference
-        ok = np.all(np.isfinite(ref.pos), axis=1)
-        pos0 = np.array([np.interp(rec.t[start], ref.t[ok], ref.pos[ok, i]) for i in range(3)])
-    else:
-        pos0 = np.zeros(3)
-    pseudo, pseudo_source = _pseudo_velocity(options, result.stationary)
+    stance_velocity, stance_velocity_source = _stance_velocity(options, result.stationary)
     if method == "increments":
         acc, gyr = rec.truth.dv, rec.truth.dth
     info = {
@@ -186,99 +217,89 @@ def prepare(rec: Recording, options: NavOptions = NavOptions()) -> _Prepared:
         "filter": replace(options.filter, gravity=gravity).as_dict(),
         "mechanisation": method,
         "alignment": {"start_sample": start, "end_sample": alignment.end, "roll_deg": math.degrees(alignment.roll),
-                      "pitch_deg": math.degrees(alignment.pitch), "heading_source": heading_source},
+                      "pitch_deg": math.degrees(alignment.pitch), "heading_source": heading_source.value},
         "calibration": cal_info,
-        "stance_velocity": pseudo_source,
+        "stance_velocity": stance_velocity_source,
         "rts": options.rts,
         "warnings": report.warnings,
         "input_counts": report.counts,
     }
-    return _Prepared(np.asarray(rec.t, float), acc, gyr, result.stationary, method, start, alignment.quat0, pos0,
-                     pseudo, heading_source, info)
+    return PreparedRecording(np.asarray(rec.t, float), acc, gyr, result.stationary, method, start, alignment.quat0,
+                             _initial_position(rec, start), stance_velocity, heading_source, info)
 
 
-def _solution(p: _Prepared, out: FilterOutput, yaw: float) -> Solution:
+def _solution(p: PreparedRecording, out: FilterOutput, yaw: float) -> Solution:
     p.info["alignment"]["heading_deg"] = math.degrees(yaw)
     p.info["skipped_updates"] = int(out.skipped_updates)
     return Solution(p.t, out.pos, out.vel, out.quat, p.stationary, p.start, out.bias_acc[-1], out.bias_gyr[-1],
                     out.gsens[-1], p.info)
 
 
-def _reference_heading(rec: Recording, p: _Prepared, pos: np.ndarray) -> float:
+def _reference_heading(rec: Recording, p: PreparedRecording, pos: np.ndarray) -> float:
     """Heading (rad) that turns a heading-0 solution's first leg onto the reference's first leg."""
     ref_dir, t_leg = first_leg_direction(rec.reference.t, rec.reference.pos, p.t[p.start])
     if not math.isfinite(ref_dir):
         return 0.0
-    est = np.array([np.interp(t_leg, p.t[p.start:], pos[p.start:, i]) for i in range(2)]) - pos[p.start, :2]
+    est = resample(t_leg, p.t[p.start:], pos[p.start:, :2]) - pos[p.start, :2]
     return ref_dir - math.atan2(est[1], est[0])
 
 
-def _with_heading(p: _Prepared, yaw: float) -> np.ndarray:
-    from . import quaternion as quat
-
+def _turned(p: PreparedRecording, yaw: float) -> np.ndarray:
+    """The prepared initial attitude turned by ``yaw`` (rad) about the vertical."""
     return quat.multiply(quat.from_euler_zyx(yaw, 0.0, 0.0), p.quat0)
 
 
-def _config(p: _Prepared) -> FilterConfig:
-    return FilterConfig(**p.info["filter"])
+def _filter(preps: list[PreparedRecording], quat0: list[np.ndarray], rts: bool) -> list[FilterOutput]:
+    """The EKF over prepared recordings from the initial attitudes ``quat0``: one run, or one batch call."""
+    config = FilterConfig(**preps[0].info["filter"])
+    if len(preps) == 1:
+        p = preps[0]
+        return [run_filter(p.t, p.acc, p.gyr, p.stationary, quat0[0], pos0=p.pos0, start=p.start, config=config,
+                           method=p.method, stance_velocity=p.stance_velocity, rts=rts)]
+    out = run_filter_batch(np.stack([p.t for p in preps]), np.stack([p.acc for p in preps]),
+                           np.stack([p.gyr for p in preps]), np.stack([p.stationary for p in preps]), np.stack(quat0),
+                           pos0=np.stack([p.pos0 for p in preps]), start=np.array([p.start for p in preps]),
+                           config=config, method=preps[0].method,
+                           stance_velocity=np.stack([p.stance_velocity for p in preps]), rts=rts)
+    return [out.of_run(i) for i in range(len(preps))]
 
 
-def navigate(rec: Recording, options: NavOptions = NavOptions()) -> Solution:
-    """Navigate one recording; see the module docstring for the steps."""
-    p = prepare(rec, options)
-    cfg = _config(p)
-
-    def once(q0):
-        return run_filter(p.t, p.acc, p.gyr, p.stationary, q0, pos0=p.pos0, start=p.start, config=cfg,
-                          method=p.method, pseudo_velocity=p.pseudo_velocity, rts=options.rts)
-
-    out = once(p.quat0)
-    yaw = float(yaw_of(p.quat0))
-    if p.heading_source == "reference first leg":
-        turn = _reference_heading(rec, p, out.pos)
-        yaw += turn
-        out = once(_with_heading(p, turn))
-    return _solution(p, out, yaw)
-
-
-def navigate_batch(recs: list[Recording], options: NavOptions = NavOptions()) -> list[Solution]:
-    """Navigate many recordings of equal length in one compiled filter call (a Monte Carlo batch).
-
-    Preparation (checks, detection, alignment) is per recording; the filter runs all recordings in lock-step
-    arrays, spread over cores. Each result equals :func:`navigate` on that recording.
-    """
-    preps = [prepare(r, options) for r in recs]
-    lengths = {len(p.t) for p in preps}
-    methods = {p.method for p in preps}
-    if len(lengths) != 1 or len(methods) != 1:
-        raise ValueError(f"navigate_batch: recordings must share length and mechanisation; got lengths "
-                         f"{sorted(lengths)} and methods {sorted(methods)}")
-    configs = {tuple(sorted(p.info["filter"].items())) for p in preps}
-    if len(configs) != 1:
-        raise ValueError("navigate_batch: recordings imply different filter configurations (gravity in meta.json)")
-    cfg = _config(preps[0])
-
-    def once(q0):
-        return run_filter_batch(np.stack([p.t for p in preps]), np.stack([p.acc for p in preps]),
-                                np.stack([p.gyr for p in preps]), np.stack([p.stationary for p in preps]), q0,
-                                pos0=np.stack([p.pos0 for p in preps]), start=np.array([p.start for p in preps]),
-                                config=cfg, method=preps[0].method,
-                                pseudo_velocity=np.stack([p.pseudo_velocity for p in preps]), rts=options.rts)
-
-    out = once(np.stack([p.quat0 for p in preps]))
+def _navigate_together(recs: list[Recording], preps: list[PreparedRecording], rts: bool) -> list[Solution]:
+    """Filter prepared recordings in one call; a second pass turns those headed by the reference's first leg."""
+    outs = _filter(preps, [p.quat0 for p in preps], rts)
     yaws = [float(yaw_of(p.quat0)) for p in preps]
-    needs_turn = [p.heading_source == "reference first leg" for p in preps]
-    if any(needs_turn):
-        turns = [_reference_heading(r, p, out.pos[i]) if needs_turn[i] else 0.0
-                 for i, (r, p) in enumerate(zip(recs, preps))]
-        out = once(np.stack([_with_heading(p, turn) for p, turn in zip(preps, turns)]))
-        yaws = [y + turn for y, turn in zip(yaws, turns)]
-    solutions = []
-    for i, p in enumerate(preps):
-        single = FilterOutput(out.quat[i], out.vel[i], out.pos[i], out.bias_acc[i], out.bias_gyr[i], out.gsens[i],
-                              out.p_diag[i], out.skipped_updates[i])
-        solutions.append(_solution(p, single, yaws[i]))
-    return solutions
+    by_reference = [p.heading_source is HeadingSource.REFERENCE_FIRST_LEG for p in preps]
+    if any(by_reference):
+        turns = [_reference_heading(rec, p, out.pos) if turn else 0.0
+                 for rec, p, out, turn in zip(recs, preps, outs, by_reference)]
+        outs = _filter(preps, [_turned(p, turn) for p, turn in zip(preps, turns)], rts)
+        yaws = [yaw + turn for yaw, turn in zip(yaws, turns)]
+    return [_solution(p, out, yaw) for p, out, yaw in zip(preps, outs, yaws)]
+
+
+def navigate(recordings: Recording | list[Recording], options: NavOptions = NavOptions()) -> Solution | list[Solution]:
+    """Navigate one recording, or several; see the module docstring for the steps.
+
+    Parameters
+    ----------
+    recordings : a Recording, or a list of them.
+    options : NavOptions, the same for all.
+
+    Returns
+    -------
+    A Solution for a Recording; a list of Solutions, in order, for a list. Several recordings that share their
+    length, mechanisation and filter configuration (gravity) run in one compiled filter call, spread over cores
+    (a Monte Carlo batch); otherwise one after the other. Preparation is per recording either way, and each
+    result equals navigating that recording alone (the same compiled code per run).
+    """
+    if isinstance(recordings, Recording):
+        return _navigate_together([recordings], [prepare(recordings, options)], options.rts)[0]
+    recs = list(recordings)
+    preps = [prepare(rec, options) for rec in recs]
+    shared = {(len(p.t), p.method, tuple(sorted(p.info["filter"].items()))) for p in preps}
+    if len(shared) == 1:
+        return _navigate_together(recs, preps, options.rts)
+    return [_navigate_together([rec], [p], options.rts)[0] for rec, p in zip(recs, preps)]
 
 
 def score_solution(rec: Recording, sol: Solution) -> dict:

@@ -1,4 +1,4 @@
-"""Stance pseudo-velocity models (compensation step 2 of the seed paper).
+"""Stance velocity models (compensation step 2 of the seed paper).
 
 In the detected stance the foot is not exactly still: it creeps forward by ~0.01 m/s and more at the stance
 edges that a larger threshold pulls into the ZUPT window. Instead of "velocity = 0", the ZUPT can use the
@@ -25,6 +25,7 @@ import numpy as np
 
 from .alignment import stationary_runs, yaw_of
 from .files import write_text_atomic
+from .series import resample
 
 MODEL_FORMAT = "nav.stance_velocity/1"
 
@@ -66,11 +67,11 @@ def stance_velocities(vel_world: np.ndarray, quat: np.ndarray, stationary: np.nd
 
 @dataclass(frozen=True)
 class ConstantStanceVelocity:
-    """The same pseudo-velocity (3,) m/s in the heading frame at every stationary sample."""
+    """The same stance velocity (3,) m/s in the heading frame at every stationary sample."""
 
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    def heading_velocity(self, stationary: np.ndarray) -> np.ndarray:
+    def stance_velocity(self, stationary: np.ndarray) -> np.ndarray:
         """(N, 3) m/s: the constant where stationary, zero elsewhere."""
         stationary = np.asarray(stationary, bool)
         return np.where(stationary[:, None], np.asarray(self.velocity, float), 0.0)
@@ -89,7 +90,7 @@ class StanceVelocityProfile:
     velocity : (K, 3) m/s, heading frame (forward, left, up), mean over the fitted stances.
     spread : (K, 3) m/s, standard deviation over the fitted stances (for reports; not used by the filter).
     max_samples : detected stances longer than this (samples, at the fitted rate) are rest, not a step: the
-        profile is not applied there (zero pseudo-velocity). Default: 1.5 x the longest fitted stance.
+        profile is not applied there (zero stance velocity). Default: 1.5 x the longest fitted stance.
     metadata : dict, what it was fitted on (gait, detector parameters, number of stances).
     """
 
@@ -114,16 +115,13 @@ class StanceVelocityProfile:
         if not stances:
             raise ValueError("StanceVelocityProfile.fit: need at least one stance of >= 2 samples")
         tau = np.linspace(0.0, 1.0, knots)
-        resampled = np.stack([
-            np.stack([np.interp(tau, (np.arange(len(s)) + 0.5) / len(s), s[:, i]) for i in range(3)], -1)
-            for s in stances
-        ])
+        resampled = np.stack([resample(tau, (np.arange(len(s)) + 0.5) / len(s), s) for s in stances])
         meta = dict(metadata or {})
         meta["stances"] = len(stances)
         longest = max(len(s) for s in stances)
         return cls(tau, resampled.mean(axis=0), resampled.std(axis=0), int(np.ceil(1.5 * longest)), meta)
 
-    def heading_velocity(self, stationary: np.ndarray) -> np.ndarray:
+    def stance_velocity(self, stationary: np.ndarray) -> np.ndarray:
         """(N, 3) m/s: the profile at each stance sample's normalised time; zero elsewhere and in long rests."""
         stationary = np.asarray(stationary, bool).copy()
         starts, ends = stationary_runs(stationary)
@@ -133,8 +131,7 @@ class StanceVelocityProfile:
         tau = normalised_stance_time(stationary)
         inside = np.isfinite(tau)
         out = np.zeros(tau.shape + (3,))
-        for i in range(3):
-            out[inside, i] = np.interp(tau[inside], self.tau, self.velocity[:, i])
+        out[inside] = resample(tau[inside], self.tau, self.velocity)
         return out
 
     def to_json(self) -> dict:

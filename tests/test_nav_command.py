@@ -26,7 +26,7 @@ def test_nav_writes_solution_and_score(recording, tmp_path):
     folder, rec = recording
     out = tmp_path / "nav"
     code = cli.main(["nav", str(folder), "--out", str(out), "--threshold", "3e4", "--sigma-a", "0.01",
-                     "--sigma-g", "0.1", "--window", "3", "--states", "15", "--rts"])
+                     "--sigma-g-dps", "0.1", "--window", "3", "--states", "15", "--rts"])
     assert code == 0
     score = json.loads((out / "score.json").read_text())
     for key in ("along_track_error_m", "perpendicular_error_m", "final_error_m", "length_ratio",

@@ -39,11 +39,11 @@ def test_static_imu_with_zupts_does_not_move():
         assert np.all(out.p_diag > 0)
 
 
-def test_heading_frame_pseudo_velocity_is_rotated_by_the_heading():
+def test_heading_frame_stance_velocity_is_rotated_by_the_heading():
     t, acc, gyr = static(2400)
     yaw = math.radians(90.0)
     out = run_filter(t, acc, gyr, np.ones(len(t), bool), Q.from_euler_zyx(yaw, 0.0, 0.0),
-                     pseudo_velocity=[0.01, 0.0, 0.0], config=FilterConfig(p0_vel=0.5))
+                     stance_velocity=[0.01, 0.0, 0.0], config=FilterConfig(p0_vel=0.5))
     # the sensor reads rest, the pseudo-measurement says 1 cm/s forward: the estimate settles between them,
     # pointing north (forward at yaw 90 deg)
     v = out.vel[-1]
@@ -111,9 +111,9 @@ def test_batch_equals_single_runs(rts):
     start = np.array([0, 5, 17])
     pv = np.random.default_rng(5).normal(0, 0.01, (runs, n, 3))
     cfg = FilterConfig(states=15, zaru=True)
-    batch = run_filter_batch(t, acc, gyr, st, q0, start=start, config=cfg, pseudo_velocity=pv, rts=rts)
+    batch = run_filter_batch(t, acc, gyr, st, q0, start=start, config=cfg, stance_velocity=pv, rts=rts)
     for r in range(runs):
-        single = run_filter(t, acc[r], gyr[r], st[r], q0[r], start=start[r], config=cfg, pseudo_velocity=pv[r],
+        single = run_filter(t, acc[r], gyr[r], st[r], q0[r], start=start[r], config=cfg, stance_velocity=pv[r],
                             rts=rts)
         for name in ("pos", "vel", "quat", "bias_gyr", "p_diag"):
             a, b = getattr(batch, name)[r], getattr(single, name)

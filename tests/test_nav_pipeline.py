@@ -88,7 +88,7 @@ def test_heading_from_the_reference_first_leg(walk):
 def test_batch_navigation_equals_single_navigation():
     recs = [synthetic_walk(strides=3, creep=c) for c in (0.01, 0.02, 0.03)]
     options = pipeline.NavOptions(detector="shoe", filter=FilterConfig(states=15))
-    batch = pipeline.navigate_batch(recs, options)
+    batch = pipeline.navigate(recs, options)
     for rec, b in zip(recs, batch):
         single = pipeline.navigate(rec, options)
         ok = np.isfinite(single.pos[:, 0])
