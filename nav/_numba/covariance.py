@@ -111,10 +111,21 @@ def propagate(P, n, q, fhat, h, rw, buffers):
 
 
 @njit(cache=True)
+def _sparse_product(h_col, h_val, h_cnt, m, X, n, out):
+    """out (m x n) = H X for the sparse m-row H of :func:`joseph_update` and X with n columns."""
+    for r in range(m):
+        for j in range(n):
+            s = 0.0
+            for e in range(h_cnt[r]):
+                s += h_val[r, e] * X[h_col[r, e], j]
+            out[r, j] = s
+
+
+@njit(cache=True)
 def update_buffers(n, m):
     """Work buffers of :func:`joseph_update` for up to m measurements."""
     return (np.empty((m, n)), np.empty((m, m)), np.empty((m, m)), np.empty((n, m)), np.empty((n, n)),
-            np.empty((n, m)), np.empty(m), np.empty(m))
+            np.empty((m, n)), np.empty(m), np.empty(m))
 
 
 @njit(cache=True)
@@ -125,13 +136,8 @@ def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, w):
     state correction to ``dx``; ``w`` holds the work buffers of :func:`update_buffers`. Returns False if S is not
     positive definite.
     """
-    HP, S, L, K, A, AHt, col, sol = w
-    for r in range(m):
-        for j in range(n):
-            s = 0.0
-            for e in range(h_cnt[r]):
-                s += h_val[r, e] * P[h_col[r, e], j]
-            HP[r, j] = s
+    HP, S, L, K, A, HAt, col, sol = w
+    _sparse_product(h_col, h_val, h_cnt, m, P, n, HP)
     for r in range(m):
         for q in range(m):
             s = 0.0
@@ -159,18 +165,13 @@ def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, w):
             for r in range(m):
                 s -= K[i, r] * HP[r, j]
             A[i, j] = s
-    for i in range(n):
-        for r in range(m):
-            s = 0.0
-            for e in range(h_cnt[r]):
-                s += A[i, h_col[r, e]] * h_val[r, e]
-            AHt[i, r] = s
+    _sparse_product(h_col, h_val, h_cnt, m, A.T, n, HAt)  # (A H^T)^T
     # P = A (I - K H)^T + K R K^T: symmetric in exact arithmetic; the upper triangle is computed and mirrored
     for i in range(n):
         for j in range(i, n):
             s = A[i, j]
             for r in range(m):
-                s += K[i, r] * r_var[r] * K[j, r] - AHt[i, r] * K[j, r]
+                s += K[i, r] * r_var[r] * K[j, r] - HAt[r, i] * K[j, r]
             P[i, j] = s
             P[j, i] = s
     return True

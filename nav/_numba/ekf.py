@@ -47,6 +47,17 @@ def initial_covariance_and_noise(n, cfg):
 
 
 @njit(cache=True)
+def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
+    """Write the nominal state into row k of the outputs."""
+    quat[k] = q
+    vel[k] = v
+    pos[k] = p
+    bias_acc[k] = ba
+    bias_gyr[k] = bg
+    gsens[k] = G
+
+
+@njit(cache=True)
 def _inject(dx, n, q, v, p, ba, bg, G):
     """Closed loop: add the error-state estimate dx to the nominal state and leave dx at zero."""
     for i in range(3):
@@ -160,12 +171,7 @@ def filter_run(mode, t, u_acc, u_gyr, m_acc, m_gyr, zupt, zaru, stance_velocity,
                 r_var[i] = cfg.zaru_sigma ** 2
             skipped += _update_and_inject(P, n, h_col, h_val, h_cnt, 3, z, r_var, dx, work, corr, q, v, p, ba, bg, G)
 
-        quat[k] = q
-        vel[k] = v
-        pos[k] = p
-        bias_acc[k] = ba
-        bias_gyr[k] = bg
-        gsens[k] = G
+        _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
         for i in range(n):
             p_diag[k, i] = P[i, i]
         if rts:
@@ -244,12 +250,7 @@ def _rts_backward(t, i0, n, rw, P_store, f_store, corr_store, quat, vel, pos, bi
         bg[:] = bias_gyr[k]
         G[:] = gsens[k]
         _inject(dx, n, q, v, p, ba, bg, G)
-        quat[k] = q
-        vel[k] = v
-        pos[k] = p
-        bias_acc[k] = ba
-        bias_gyr[k] = bg
-        gsens[k] = G
+        _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
     return failed
 
 
