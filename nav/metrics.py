@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .alignment import stationary_runs
+from .alignment import stationary_runs, yaw_of
 from .series import resample
 
 TRACK_DIRECTION_MIN_DISTANCE = 2.0  # m, points closer to the start give no usable track direction
@@ -46,11 +46,6 @@ def _path_length(t: np.ndarray, pos: np.ndarray) -> float:
 
 def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
-
-
-def _yaw(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.arctan2(2 * (x * y + w * z), 1 - 2 * (y * y + z * z))
 
 
 def end_point_errors(est_end: np.ndarray, true_start: np.ndarray, true_end: np.ndarray) -> dict:
@@ -185,8 +180,8 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
         out["stride_length_ratio"] = stride_length_ratio(t, pos, np.asarray(stationary, bool), rt, rp)
     if quat is not None and ref_quat is not None:
         q_est = np.asarray(quat, float)[ok]
-        yaw_est = np.interp(rt, t_est, np.unwrap(_yaw(q_est)))
-        err = _wrap(yaw_est - _yaw(np.asarray(ref_quat, float)[rok]))
+        yaw_est = np.interp(rt, t_est, np.unwrap(yaw_of(q_est)))
+        err = _wrap(yaw_est - yaw_of(np.asarray(ref_quat, float)[rok]))
         out["heading_drift_source"] = "attitude yaw (estimate - truth)"
     else:
         err = track_heading_error(ep, rp)
