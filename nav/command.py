@@ -42,7 +42,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--zupt-sigma", type=float, default=_DEFAULT_FILTER.zupt_sigma,
                    help="ZUPT noise std, m/s (default 0.01)")
     p.add_argument("--zaru", action="store_true", help="also apply a zero angular-rate update (needs --states >= 15)")
-    p.add_argument("--level-sigma", type=float, default=0.0,
+    p.add_argument("--level-sigma", type=float, default=_DEFAULT_FILTER.level_sigma,
                    help="height constraint std at ZUPTs, m (default 0: no level-walking constraint)")
     p.add_argument("--method", choices=METHODS, default="auto", help="mechanisation (default auto)")
     p.add_argument("--heading-deg", type=float, default=None,

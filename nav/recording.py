@@ -162,12 +162,14 @@ class Recording:
         return float(self.meta.get("sampling", {}).get("gravity_mps2", DEFAULT_GRAVITY))
 
 
-def _write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
-    # %.17g round-trips float64 exactly
+def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
+    """Write a table with a header row of column names; ``%.17g`` round-trips float64 exactly."""
     np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
 
 
-def _read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
+def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
+    """The (M, len(header)) table of a CSV written by :func:`write_csv`; raises RecordingError naming the file
+    when its header or column count is not ``header``'s."""
     with open(path) as fh:
         first = fh.readline().strip().split(",")
     if tuple(first) != header:
@@ -181,17 +183,17 @@ def _read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
 def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> None:
     """Write ``rec`` into an existing (temporary) folder. Prefer :func:`write_recording`."""
     folder = Path(folder)
-    _write_csv(folder / "imu.csv", IMU_COLUMNS, np.column_stack([rec.t, rec.acc, rec.gyr]))
+    write_csv(folder / "imu.csv", IMU_COLUMNS, np.column_stack([rec.t, rec.acc, rec.gyr]))
     arrays = {"imu": np.column_stack([rec.t, rec.acc, rec.gyr])}
     if rec.truth is not None:
         arrays["truth"] = rec.truth.as_table()
-        _write_csv(folder / "truth.csv", TRUTH_COLUMNS, arrays["truth"])
+        write_csv(folder / "truth.csv", TRUTH_COLUMNS, arrays["truth"])
     if rec.events is not None:
         arrays["events"] = rec.events.as_table()
-        _write_csv(folder / "events.csv", EVENT_COLUMNS, arrays["events"])
+        write_csv(folder / "events.csv", EVENT_COLUMNS, arrays["events"])
     if rec.reference is not None:
         arrays["reference"] = np.column_stack([rec.reference.t, rec.reference.pos])
-        _write_csv(folder / "reference.csv", REFERENCE_COLUMNS, arrays["reference"])
+        write_csv(folder / "reference.csv", REFERENCE_COLUMNS, arrays["reference"])
     meta = dict(rec.meta)
     meta.setdefault("schema_version", SCHEMA_VERSION)
     meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if (folder / k).exists() or k == "imu.csv"})
@@ -230,14 +232,14 @@ def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
         with np.load(npz_path) as z:
             tables = {k: z[k] for k in z.files}
     else:
-        tables = {"imu": _read_csv(folder / "imu.csv", IMU_COLUMNS)}
+        tables = {"imu": read_csv(folder / "imu.csv", IMU_COLUMNS)}
         for key, name, cols in (
             ("truth", "truth.csv", TRUTH_COLUMNS),
             ("events", "events.csv", EVENT_COLUMNS),
             ("reference", "reference.csv", REFERENCE_COLUMNS),
         ):
             if (folder / name).exists():
-                tables[key] = _read_csv(folder / name, cols)
+                tables[key] = read_csv(folder / name, cols)
     imu = tables["imu"]
     rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta)
     if "truth" in tables:

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .files import atomic_output_dir, write_json
+from .recording import read_csv, write_csv
 
 SOLUTION_COLUMNS = ("t", "pos_x", "pos_y", "pos_z", "vel_x", "vel_y", "vel_z", "q_w", "q_x", "q_y", "q_z", "zupt")
 
@@ -53,8 +54,7 @@ class Solution:
 def write_solution_into(folder: Path, solution: Solution, score: dict) -> None:
     """Write ``solution.csv`` and ``score.json`` into an existing (temporary) folder; prefer write_solution."""
     folder = Path(folder)
-    np.savetxt(folder / "solution.csv", solution.table(), delimiter=",", header=",".join(SOLUTION_COLUMNS),
-               comments="", fmt="%.17g")
+    write_csv(folder / "solution.csv", SOLUTION_COLUMNS, solution.table())
     write_json(folder / "score.json", score)
 
 
@@ -66,9 +66,5 @@ def write_solution(folder: str | Path, solution: Solution, score: dict, overwrit
 
 
 def read_solution_csv(path: str | Path) -> np.ndarray:
-    """The (M, 12) table of a solution.csv (columns ``SOLUTION_COLUMNS``)."""
-    with open(path) as fh:
-        header = fh.readline().strip().split(",")
-    if tuple(header) != SOLUTION_COLUMNS:
-        raise ValueError(f"{path}: header {header} is not {list(SOLUTION_COLUMNS)}")
-    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    """The (M, 12) table of a solution.csv (columns ``SOLUTION_COLUMNS``); RecordingError on another layout."""
+    return read_csv(Path(path), SOLUTION_COLUMNS)
