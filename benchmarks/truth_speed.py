@@ -10,7 +10,7 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 from gaitsim.scenario import load_scenario  # noqa: E402
-from gaitsim.truth import run_generators, simulate_truth  # noqa: E402
+from gaitsim.simulate import run_generators, simulate_truth  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -8,10 +8,10 @@ Sections and keys (every key optional unless marked; units in the key names):
                 arc:      radius_m (>= one step), turn_deg (signed, left positive), yaw_deg, start_m
                 polyline: waypoints_m [[x, y], ...] (>= 2), corner_radius_m (>= one step), closed (bool)
                 static:   duration_s (>0)
-``[gait]``      fields of :class:`gaitsim.gait.GaitParams`
-``[impact]``    fields of :class:`gaitsim.gait.ImpactParams`
-``[micromotion]`` fields of :class:`gaitsim.gait.MicroMotionParams`
-``[mount]``     fields of :class:`gaitsim.foot.Mount`
+``[gait]``      fields of :class:`gaitsim.world.gait.GaitParams`
+``[impact]``    fields of :class:`gaitsim.world.gait.ImpactParams`
+``[micromotion]`` fields of :class:`gaitsim.world.gait.MicroMotionParams`
+``[mount]``     fields of :class:`gaitsim.world.foot.Mount`
 ``[sampling]``  rate_hz (>0, default 800), gravity_mps2 (>0, default 9.81)
 ``[sensor]``    handed to :func:`gaitsim.imu.config.sensor_from_table` (absent: the ideal sensor)
 ``[nav]``, ``[experiment]``  kept as tables for the filter and the experiment runner, which validate them.
@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import path as paths
+from .world import path as paths
 from .errors import ScenarioError
-from .foot import MOUNTS, Mount
-from .gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+from .world.foot import MOUNTS, Mount
+from .world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk
 
 PATH_KEYS = {
     "straight": {"kind", "length_m", "yaw_deg", "start_m"},
@@ -158,7 +158,7 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
 
 
 def build_path(table: dict, gait: GaitParams, where: str):
-    """The :class:`gaitsim.path.Path` of a [path] table (None for ``static``) and the static duration (s)."""
+    """The :class:`gaitsim.world.path.Path` of a [path] table (None for ``static``) and the static duration (s)."""
     kind = table.get("kind")
     _require(kind in PATH_KEYS, where, "kind", kind, f"allowed: {', '.join(PATH_KEYS)}")
     for key in table:

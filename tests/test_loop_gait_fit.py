@@ -5,10 +5,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from gaitsim.gait import GaitParams, ImpactParams
+from gaitsim.world.gait import GaitParams, ImpactParams
 from gaitsim.loop import gait_fit, mount_fit, residuals, twin
 from gaitsim.scenario import scenario_from_dict
-from gaitsim.truth import simulate_walk
+from gaitsim.simulate import simulate_walk
 
 SHAPE = {"heel_rocker_frac": 0.12, "foot_flat_frac": 0.28, "push_off_frac": 0.2, "swing_frac": 0.4,
          "pitch_heel_strike_deg": -24.0, "pitch_rate_heel_strike_dps": 180.0, "pitch_accel_heel_strike_dps2": 4000.0,

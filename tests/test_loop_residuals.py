@@ -5,7 +5,7 @@ import pytest
 
 from gaitsim.loop import residuals
 from gaitsim.scenario import scenario_from_dict
-from gaitsim.truth import simulate_walk
+from gaitsim.simulate import simulate_walk
 
 
 def _walk(seed: int, sensor: dict | None = None, **sections):

@@ -8,7 +8,7 @@ import pytest
 import nav
 from gaitsim.loop import residuals, twin
 from gaitsim.scenario import scenario_from_dict
-from gaitsim.truth import simulate_walk
+from gaitsim.simulate import simulate_walk
 
 
 @pytest.fixture(scope="module")

@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 from nav_synthetic import synthetic_walk
 
+from gaitsim import cli
 from nav import pipeline
 from nav.ekf import FilterConfig
 from nav.recording import Recording, write_recording
 from nav.solution import SOLUTION_COLUMNS, read_solution_csv
-
-cli = pytest.importorskip("gaitsim.cli", reason="the lead's command line (gaitsim.cli) is not there")
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from nav_synthetic import synthetic_walk
 
-from nav import pipeline
+from gaitsim.scenario import load_scenario
+from gaitsim.simulate import simulate_walk
+from nav import calibration, pipeline
 from nav.ekf import FilterConfig
 from nav.recording import Recording, Reference
 from nav.zupt_velocity import (StanceVelocityProfile, load_stance_velocity, save_stance_velocity,
@@ -60,7 +62,6 @@ def test_fitted_stance_velocity_profile_removes_the_loss(walk, tmp_path):
 
 
 def test_calibration_step_undoes_a_known_sensor_error(walk):
-    calibration = pytest.importorskip("nav.calibration", reason="nav.calibration (IMU helper's module) not there yet")
     cal = calibration.Calibration(
         b_a=[0.05, -0.03, 0.02], M_a=np.eye(3) + 1e-3 * np.array([[1, 2, 0], [0, -1, 3], [1, 0, 2]]),
         b_g=[1e-3, -2e-3, 5e-4], M_g=np.eye(3) + 1e-3 * np.array([[2, 0, 1], [1, 1, 0], [0, 2, -1]]),
@@ -99,9 +100,7 @@ def test_batch_navigation_equals_single_navigation():
 # ------------------------------------------------------------------------------------------- the simulator's walk
 @pytest.fixture(scope="module")
 def simulated():
-    truth_mod = pytest.importorskip("gaitsim.truth", reason="the truth simulator (gaitsim.truth) is not there")
-    scenario = pytest.importorskip("gaitsim.scenario").load_scenario(ROOT / "scenarios/straight_100m.toml")
-    return truth_mod.simulate_walk(scenario, seed=1)
+    return simulate_walk(load_scenario(ROOT / "scenarios/straight_100m.toml"), seed=1)
 
 
 def test_simulated_walk_true_stance_velocity_error_below_1mm_per_100m(simulated):

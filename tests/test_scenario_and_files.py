@@ -7,7 +7,7 @@ import pytest
 
 from gaitsim.cli import main
 from gaitsim.errors import ScenarioError
-from gaitsim.generate import generate
+from gaitsim.simulate import generate
 from gaitsim.scenario import load_scenario, scenario_from_dict
 from nav.recording import TRUTH_COLUMNS, read_recording
 
@@ -122,7 +122,7 @@ def test_multi_run_output_and_refusal_to_clobber(tmp_path):
 
 
 def test_interrupted_generation_leaves_nothing(tmp_path, monkeypatch):
-    import gaitsim.generate as gen
+    import gaitsim.simulate as gen
 
     scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
 

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from gaitsim import smooth
-from gaitsim.foot import FootModel, Mount
-from gaitsim.gait import plan_stances
-from gaitsim.profile import FootTrajectory
+from gaitsim.world import smooth
+from gaitsim.world.foot import FootModel, Mount
+from gaitsim.world.gait import plan_stances
+from gaitsim.world.profile import FootTrajectory
 from gaitsim.scenario import load_scenario, scenario_from_dict
-from gaitsim.truth import run_generators, simulate_walk
+from gaitsim.simulate import run_generators, simulate_walk
 from nav import quaternion as Q
 from strapdown_reference import integrate_increments, rk4_windows
 

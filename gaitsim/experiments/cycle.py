@@ -15,7 +15,7 @@ from nav import detectors
 from nav.recording import Recording
 from nav.zupt_velocity import to_heading_frame
 
-from ..tracker import TrackerSpec, track
+from .tracker import TrackerSpec, track
 
 PHASES = 400
 

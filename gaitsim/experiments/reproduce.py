@@ -1,7 +1,7 @@
 """``gaitsim reproduce``: the seed paper end to end, then beyond it, deterministic from scenarios/paper.toml.
 
 Steps: the simulated calibration lab (own seed) -> stance pseudo-velocity from tracked calibration walks (own
-seeds) -> Monte Carlo tasks through :func:`gaitsim.runner.run_tasks` (resumable, parallel, optionally Dask) ->
+seeds) -> Monte Carlo tasks through :func:`gaitsim.experiments.runner.run_tasks` (resumable, parallel, optionally Dask) ->
 gait-cycle analysis of run 0 -> tables, figures and results/README.md (:mod:`gaitsim.experiments.report`).
 """
 
@@ -16,10 +16,10 @@ import numpy as np
 from nav.metrics import summarise_runs
 from nav.solution import write_json
 
-from ..runner import run_tasks
+from .runner import run_tasks
 from ..scenario import load_scenario, scenario_from_dict
-from ..tracker import TrackerSpec
-from ..truth import simulate_walk
+from .tracker import TrackerSpec
+from ..simulate import simulate_walk
 from . import report
 from .cycle import cycle_averages, detected_stance_s, predicted_length_loss
 from .paper import build_tasks, quick_overrides

@@ -23,8 +23,8 @@ from nav.zupt_velocity import StanceVelocityProfile, save_stance_velocity, stanc
 from ..errors import ScenarioError
 from ..imu.calibration_lab import run_lab
 from ..scenario import Scenario, fill, scenario_from_dict
-from ..tracker import TrackerSpec, track
-from ..truth import simulate_walk
+from .tracker import TrackerSpec, track
+from ..simulate import simulate_walk
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ import numpy as np
 from nav.recording import Recording
 
 from ..scenario import scenario_from_dict
-from ..truth import simulate_walk
+from ..simulate import simulate_walk
 from . import attribution, twin
 
 WALK_LENGTH_M = 20.0

@@ -34,8 +34,8 @@ import numpy as np
 from nav import quaternion as quat
 from nav.recording import Recording
 
-from ..foot import FootModel, Mount
-from ..gait import MicroMotionParams
+from ..world.foot import FootModel, Mount
+from ..world.gait import MicroMotionParams
 from ..scenario import fill
 
 from . import residuals

@@ -3,7 +3,7 @@
 The foot's dominant motion is its pitch. Per stride (gyro onset to gyro onset, :mod:`gaitsim.loop.residuals`),
 the angular rate about the stride's dominant axis is averaged on a phase grid (:func:`stride_profile`) and its
 integral gives the pitch. The simulator's pitch of a steady stride comes from
-:func:`gaitsim.profile.pitch_profile` alone (no MuJoCo; a few ms), so it can be fitted:
+:func:`gaitsim.world.profile.pitch_profile` alone (no MuJoCo; a few ms), so it can be fitted:
 
 1. **Events from features** (:func:`initial_guess`): heel strike at the impact peak of |a| late in the stride;
    the forefoot slap from the largest rocker rate after it to the quiet stance; heel off where the rate leaves
@@ -23,10 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .. import path as paths
+from ..world import path as paths
 from ..errors import ScenarioError
-from ..gait import GaitParams, ImpactParams, MicroMotionParams, Walk, plan_stances
-from ..profile import pitch_profile
+from ..world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk, plan_stances
+from ..world.profile import pitch_profile
 from ..scenario import validate_gait
 from . import residuals
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from ..foot import FootModel
+from ..world.foot import FootModel
 from . import residuals
 
 PROBE_M = 0.1  # m, how far each probe moves the site

@@ -47,12 +47,11 @@ from nav.checks import quietest_window
 from nav.recording import Recording, Reference
 
 from ..errors import ScenarioError
-from ..gait import GaitParams, ImpactParams
+from ..world.gait import GaitParams, ImpactParams
 from ..imu.config import sensor_from_table
-from ..imu.model import apply_sensor
 from ..scenario import scenario_from_dict
-from ..truth import run_generators, simulate_walk
-from ..foot import FootModel
+from ..simulate import sense, simulate_walk
+from ..world.foot import FootModel
 from . import gait_fit, mount_fit, residuals
 
 TWIN_SEED = 7
@@ -100,10 +99,7 @@ def simulate(twin: Twin, seed: int | None = None) -> Recording:
     if "sensor" not in twin.doc:
         return base
     spec = sensor_from_table(twin.doc["sensor"], "<twin> [sensor]")
-    _, sensor_rng = run_generators(seed, 0)
-    t, acc, gyr = apply_sensor(spec, base.truth.t, base.truth.acc, base.truth.gyr, sensor_rng)
-    meta = dict(base.meta, sensor=spec.declared())
-    return Recording(t=t, acc=acc, gyr=gyr, meta=meta, truth=base.truth, events=base.events)
+    return sense(base.truth, base.events, base.meta, spec, seed)
 
 
 def match_noise(twin: Twin) -> Twin:

@@ -62,7 +62,7 @@ class FootModel:
     def __init__(self, mount: Mount = Mount(), gravity: float = 9.81):
         if mount.site not in MOUNTS:
             raise ValueError(f"mount site {mount.site!r} is not one of {MOUNTS}")
-        xml = resources.files("gaitsim").joinpath("assets/foot.xml").read_text()
+        xml = resources.files("gaitsim.world").joinpath("assets/foot.xml").read_text()
         self.model = mujoco.MjModel.from_xml_string(xml)
         self.model.opt.gravity[:] = (0.0, 0.0, -gravity)
         self.data = mujoco.MjData(self.model)
