@@ -12,7 +12,6 @@ variability and the sensor's errors, so experiments can vary one alone. The retu
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ from nav.recording import Events, Recording, Truth, atomic_output_dir, write_rec
 from . import __version__
 from .imu.model import SensorSpec, apply_sensor
 from .imu.units import STANDARD_GRAVITY
-from .scenario import Scenario
+from .scenario import Scenario, section_table
 from .world.truth import simulate_truth
 
 IDEAL_SENSOR = {"name": "ideal", "withheld": False, "note": "imu.csv holds the exact truth (no sensor model)"}
@@ -51,10 +50,10 @@ def describe(scenario: Scenario, seed: int, run: int) -> dict:
         },
         "sampling": {"rate_hz": scenario.rate_hz, "gravity_mps2": scenario.gravity},
         "path": scenario.path_table,
-        "gait": dataclasses.asdict(w.gait),
-        "impact": dataclasses.asdict(w.impact),
-        "micromotion": dataclasses.asdict(w.micro),
-        "mount": dataclasses.asdict(scenario.mount),
+        "gait": section_table(w.gait),
+        "impact": section_table(w.impact),
+        "micromotion": section_table(w.micro),
+        "mount": section_table(scenario.mount),
         "stance_label": "foot flat: t_ff <= t < t_ho (events.csv)",
     }
 

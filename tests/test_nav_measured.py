@@ -6,7 +6,6 @@ x-io's own tracker closes the loops to 82 mm and 421 mm; a plain ZUPT filter rea
 
 import warnings
 
-import pytest
 
 from nav.pipeline import NavOptions, run
 from conftest import DATA, needs_data

@@ -246,7 +246,7 @@ def test_impact_ringing_adds_a_damped_resonance_at_its_frequency():
 
 def test_mount_rotation_rotates_the_sensor_axes():
     rpy = (12.0, -8.0, 0.0)
-    foot = FootModel(Mount(rpy_deg=rpy))
+    foot = FootModel(Mount(rpy=tuple(np.deg2rad(rpy))))
     s = foot.sample(np.zeros((1, 6)), np.zeros((1, 6)), np.zeros((1, 6)))
     c = Q.to_matrix(Q.from_euler_zyx(0.0, np.deg2rad(rpy[1]), np.deg2rad(rpy[0])))
     np.testing.assert_allclose(s.acc[0], c.T @ [0, 0, G], atol=1e-12)

@@ -11,6 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..numbers import shown  # noqa: E402
+
 PAPER = {"perpendicular_error_m": (2.57, 0.31), "along_track_error_m": (1.95, 0.07), "final_error_m": (3.24, 0.50)}
 METRICS = ("perpendicular_error_m", "along_track_error_m", "final_error_m")
 HEADLINE = ("before", "calibration", "stance_velocity", "both")
@@ -18,10 +20,9 @@ HEADLINE = ("before", "calibration", "stance_velocity", "both")
 
 def _table(path: Path, header: list[str], rows: list[list]) -> str:
     """Write ``path`` (CSV) and return the same table as markdown."""
-    fmt = lambda v: f"{v:.3f}" if isinstance(v, float) else str(v)  # noqa: E731
-    path.write_text("\n".join([",".join(header)] + [",".join(fmt(v) for v in r) for r in rows]) + "\n")
+    path.write_text("\n".join([",".join(header)] + [",".join(shown(v, ".3f") for v in r) for r in rows]) + "\n")
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows]
+    lines += ["| " + " | ".join(shown(v, ".3f") for v in r) + " |" for r in rows]
     return "\n".join(lines)
 
 
