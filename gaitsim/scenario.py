@@ -18,7 +18,8 @@ Sections and keys (every key optional unless marked; units in the key names):
 ``[mount]``     fields of :class:`gaitsim.world.foot.Mount`, likewise
 ``[sampling]``  rate_hz (>0, default 800), gravity_mps2 (>0, default nav's 9.81)
 ``[sensor]``    handed to :func:`gaitsim.imu.config.sensor_from_table` (absent: the ideal sensor)
-``[nav]``, ``[experiment]``  kept as tables for the filter and the experiment runner, which validate them.
+``[nav]``, ``[experiment]``, ``[targets]``  kept as tables for the filter and the experiment runner (which
+                validates them; ``[targets]`` holds the numbers a reproduction is measured against).
 
 Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
 key, the value and what is allowed; nothing is written.
@@ -64,7 +65,8 @@ PATH_KEYS = {
     "polyline": {"kind", "waypoints_m", "corner_radius_m", "closed"},
     "static": {"kind", "duration_s"},
 }
-SECTIONS = {"scenario", "path", "gait", "impact", "micromotion", "mount", "sampling", "sensor", "nav", "experiment"}
+SECTIONS = {"scenario", "path", "gait", "impact", "micromotion", "mount", "sampling", "sensor", "nav", "experiment",
+            "targets"}
 
 
 @dataclass(frozen=True)
@@ -83,6 +85,7 @@ class Scenario:
     sensor: SensorSpec | None = None
     nav: dict = field(default_factory=dict)
     experiment: dict = field(default_factory=dict)
+    targets: dict = field(default_factory=dict)
     source: str = ""
 
     def with_seed(self, seed: int) -> "Scenario":
@@ -305,7 +308,7 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
         mount=mount, rate_hz=rate, gravity=gravity, seed=seed, runs=runs,
         description=_check_type(f"{source} [scenario]", "description", head.get("description", ""), ""),
         path_table=dict(doc["path"]), sensor=sensor, nav=dict(doc.get("nav", {})),
-        experiment=dict(doc.get("experiment", {})), source=source,
+        experiment=dict(doc.get("experiment", {})), targets=dict(doc.get("targets", {})), source=source,
     )
 
 
@@ -372,7 +375,7 @@ def scenario_document(scenario: Scenario) -> dict:
            "sampling": {"rate_hz": scenario.rate_hz, "gravity_mps2": scenario.gravity}}
     if scenario.sensor is not None:
         doc["sensor"] = sensor_table(scenario.sensor)
-    for section in ("nav", "experiment"):
+    for section in ("nav", "experiment", "targets"):
         if getattr(scenario, section):
             doc[section] = dict(getattr(scenario, section))
     return doc

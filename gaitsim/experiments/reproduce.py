@@ -23,7 +23,7 @@ from ..simulate import simulate_walk
 from . import report
 from .cycle import cycle_averages, detected_stance_s, predicted_length_loss
 from .paper import build_tasks, quick_overrides
-from .setup import calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario
+from .setup import calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario, targets_from_scenario
 from .tasks import walk_task
 
 PAPER = Path(__file__).resolve().parents[2] / "scenarios" / "paper.toml"
@@ -48,6 +48,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
     clock = time.perf_counter()
     scenario = load_scenario(scenario_path)
     nav, exp = settings_from_scenario(scenario)
+    targets = targets_from_scenario(scenario)
     doc = scenario_doc(scenario)
     runs = scenario.runs
     if quick:
@@ -90,7 +91,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
         "walk": results[0]["walk"],
     }
     summary["timings_s"] = timings
-    report.write(out, summary, main, avg, results, tasks, doc)
+    report.write(out, summary, main, avg, results, tasks, doc, targets)
     write_json(out / "summary.json", summary)
     return summary
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -69,6 +70,37 @@ class ExperimentSettings:
     sensitivity_presets: tuple[str, ...] = ("bmi160", "vn200", "adis16497")
     sensitivity_detectors: tuple[str, ...] = ("shoe", "are", "mv", "mag")
     workers: int = 2
+
+
+@dataclass(frozen=True)
+class PaperTargets:
+    """The [targets] table: the seed paper's numbers the reproduction is measured against (every key required;
+    see scenarios/paper.toml for each one's source). Units in the names; deg/s for the heading drift."""
+
+    perpendicular_error_before_m: float = math.nan
+    along_track_error_before_m: float = math.nan
+    final_error_before_m: float = math.nan
+    final_error_after_max_m: float = math.nan
+    reduction_min: float = math.nan
+    heading_drift_dps: float = math.nan
+    detected_stance_at_1e4_s: float = math.nan
+    detected_stance_at_3e4_s: float = math.nan
+    fig5_gap_max: float = math.nan
+    relative_tolerance: float = math.nan
+
+    def within(self, value: float, target: float) -> str:
+        """"yes" when ``value`` lies within ``relative_tolerance`` x |target| of ``target``, else "no"."""
+        return "yes" if abs(value - target) <= self.relative_tolerance * abs(target) else "no"
+
+
+def targets_from_scenario(scenario: Scenario) -> PaperTargets:
+    """Validate the [targets] table: every key of :class:`PaperTargets`, a number each."""
+    where = f"{scenario.source} [targets]"
+    targets = fill(PaperTargets, scenario.targets, where)
+    missing = [f.name for f in dataclasses.fields(PaperTargets) if math.isnan(getattr(targets, f.name))]
+    if missing:
+        raise ScenarioError(f"{where}: missing key(s) {missing}; every one of them is required")
+    return targets
 
 
 def _tuple_fields(cls) -> dict:

@@ -37,9 +37,9 @@ from scipy.spatial.transform import Rotation, Slerp
 from nav import quaternion as quat
 from nav.recording import Recording, RecordingError, Reference
 
+from ..imu.units import STANDARD_GRAVITY
 from . import mocap
 from .quality import (
-    STANDARD_GRAVITY,
     frame_checks,
     nan_counts,
     saturation_counts,

@@ -25,8 +25,8 @@ import numpy as np
 
 from nav.recording import Recording, RecordingError, Reference
 
+from ..imu.units import STANDARD_GRAVITY
 from .quality import (
-    STANDARD_GRAVITY,
     frame_checks,
     jitter_stats,
     nan_counts,
