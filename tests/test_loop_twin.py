@@ -72,3 +72,13 @@ def test_noise_is_matched_to_the_static_part(fitted):
     q0, q1 = 20, 200  # the first second is standing in both
     ratio = sim.gyr[q0:q1].std(0) / rec.gyr[q0:q1].std(0)
     assert ratio == pytest.approx([1, 1, 1], rel=0.25)
+
+
+def test_a_sensor_change_reuses_the_simulated_walk(fitted):
+    _, fit = fitted
+    simulate = twin.TwinSimulator()
+    base = simulate(fit)
+    biased = simulate(fit.with_changes({"sensor": {"accel_bias": [[0.1, -0.2, 0.05], "m/s^2"]}}))
+    assert biased.truth is base.truth  # the walk was simulated once
+    np.testing.assert_allclose(biased.acc - base.acc, np.tile([0.1, -0.2, 0.05], (len(base.t), 1)), atol=1e-9)
+    np.testing.assert_array_equal(biased.gyr, base.gyr)

@@ -210,7 +210,8 @@ def _readme(out: Path, s: dict, md: dict, doc: dict, t: PaperTargets) -> None:
         ["final error after both steps (m)", t.final_error_after_max_m, after["final_error_m"],
          yes(after["final_error_m"] <= t.final_error_after_max_m)],
         ["reduction before/after (x)", t.reduction_min, ratio, yes(ratio >= t.reduction_min)],
-        ["heading drift from G_g alone (deg/s)", t.heading_drift_dps, abs(drift), t.within(abs(drift), t.heading_drift_dps)],
+        ["heading drift from G_g alone (deg/s)", t.heading_drift_dps, abs(drift),
+         t.within(abs(drift), t.heading_drift_dps)],
         ["detected stance at 1e4 (s)", t.detected_stance_at_1e4_s, det[1e4]["duration_s"],
          t.within(det[1e4]["duration_s"], t.detected_stance_at_1e4_s)],
         ["detected stance at 3e4 (s)", t.detected_stance_at_3e4_s, det[3e4]["duration_s"],
@@ -243,8 +244,8 @@ Regenerate with `gaitsim reproduce` (deterministic from `scenarios/paper.toml`; 
   from the foot's motion inside and at the edges of the zero-velocity windows. The default micro-motion (creep
   0.01 m/s over foot flat, settling and heel-off pulses of 0.02 m/s: Fig. 3's order, anchors §7) and the foot's
   rocking at the stance edges give {micro:.2f} m with an ideal sensor (error budget, `micromotion`). The paper's
-  {t.along_track_error_before_m} m implies more motion at the stance edges than that profile has. The profile was not scaled up to match:
-  its magnitude is the loop's job (issue 6), from tracked real feet.
+  {t.along_track_error_before_m} m implies more motion at the stance edges than that profile has. The profile was not scaled up to
+  match: its magnitude is the loop's job (issue 6), from tracked real feet.
 - **Fig. 5.** The filter's loss is not the in-window integral of the residual velocity. At the end of each window
   the foot already moves (heel-off), the ZUPT clamps that velocity to zero, and the swing carries the error to the
   next window, where the filter's velocity-position correlation takes back only part of it. So the loss is several

@@ -1,7 +1,8 @@
 """``gaitsim reproduce``: the seed paper end to end, then beyond it, deterministic from scenarios/paper.toml.
 
 Steps: the simulated calibration lab (own seed) -> stance pseudo-velocity from tracked calibration walks (own
-seeds) -> Monte Carlo tasks through :func:`gaitsim.experiments.runner.run_tasks` (resumable, parallel, optionally Dask) ->
+seeds) -> Monte Carlo tasks through :func:`gaitsim.experiments.runner.run_tasks` (resumable, parallel, optionally
+Dask) ->
 gait-cycle analysis of run 0 -> tables, figures and results/README.md (:mod:`gaitsim.experiments.report`).
 """
 

@@ -19,14 +19,13 @@ simulated, so two signatures can be compared number by number:
    acc_peak                    m/s^2     largest |specific force| of the stride
    gyr_peak                    deg/s     largest |angular rate| of the stride
    hf40, hf80                  %         share of the stride's |a| variance above 40 / 80 Hz (only when
-                                         the Nyquist frequency exceeds settings.HF_NYQUIST_MARGIN
-                                         times the band edge)
-   onset_hf                    m/s^2     rms of |a| high-passed at settings.ONSET_HF_EDGE_HZ over
-                                         the first settings.ONSET_WINDOW_S of the stance (impact ringing lives here)
+                                         the Nyquist frequency exceeds HF_NYQUIST_MARGIN times the edge)
+   onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
+                                         ONSET_WINDOW_S of the stance (impact ringing lives here)
    acc_gyro_lag                ms        shift of the stride's cross-correlation curve of |a| with |dw/dt|
-                                         (band-passed, +-settings.LAG_WINDOW_S) against the twin's mean curve; set by
-                                         :func:`gaitsim.loop.residuals.compare` (the twin's strides against their own mean give its
-                                         spread), so a pure relative delay of the gyro shows as its value
+                                         (band-passed, +-LAG_WINDOW_S) against the twin's mean curve; set by
+                                         residuals.compare (the twin's strides against their own mean give
+                                         its spread), so a pure relative delay of the gyro shows as its value
    swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
                                          momentum direction of the gyro, sign so that y > 0)
    stance_velocity             m/s       forward velocity of the position track (reference or truth) over
@@ -35,8 +34,8 @@ simulated, so two signatures can be compared number by number:
 
    plus ``rest_acc_norm`` (m/s^2, |mean specific force| over the first detected rest, uncertainty its sample
    standard deviation / sqrt(samples)) and the phase profiles: each stride's six channels resampled onto
-   ``settings.PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean and standard
-   error.
+   ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean and standard
+   error. Capitalised names are :mod:`gaitsim.loop.settings`.
 
 The residuals between two signatures are :mod:`gaitsim.loop.residuals`.
 """
