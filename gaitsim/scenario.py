@@ -71,7 +71,9 @@ SECTIONS = {"scenario", "path", "gait", "impact", "micromotion", "mount", "sampl
 
 @dataclass(frozen=True)
 class Scenario:
-    """A validated scenario: the walk, the mount, sampling and the (unparsed-here) sensor and nav tables."""
+    """A validated scenario in SI: the walk, the mount, sampling (Hz, m/s^2), the sensor (None: ideal), and the
+    [path] table as given (for the metadata) and the [nav], [experiment], [targets] tables (validated by their
+    users)."""
 
     name: str
     walk: Walk
@@ -87,9 +89,6 @@ class Scenario:
     experiment: dict = field(default_factory=dict)
     targets: dict = field(default_factory=dict)
     source: str = ""
-
-    def with_seed(self, seed: int) -> "Scenario":
-        return dataclasses.replace(self, seed=seed)
 
 
 def _is_number(v) -> bool:

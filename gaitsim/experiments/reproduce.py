@@ -24,7 +24,8 @@ from ..simulate import simulate_walk
 from . import report
 from .cycle import cycle_averages, detected_stance_s, predicted_length_loss
 from .paper import build_tasks, quick_overrides
-from .setup import calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario, targets_from_scenario
+from .setup import (calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario,
+                    targets_from_scenario)
 from .tasks import walk_task
 
 PAPER = Path(__file__).resolve().parents[2] / "scenarios" / "paper.toml"
