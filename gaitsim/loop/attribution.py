@@ -252,7 +252,7 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
     lo_a, hi_a = axis[max(i - 1, 0)], axis[min(i + 1, len(axis) - 1)]
     if hi_a > lo_a and math.isfinite(costs[i]):
         found = minimize_scalar(lambda a: evaluate(from_axis(a))[0], bounds=(lo_a, hi_a), method="bounded",
-                                options={"maxiter": settings.BRENT_ITERATIONS, "xatol": (hi_a - lo_a) * 1e-3})
+                                options={"maxiter": settings.BRENT_ITERATIONS, "xatol": (hi_a - lo_a) * settings.BRENT_TOLERANCE})
         best = found.x if found.fun <= costs[i] else axis[i]
     else:
         best = axis[i]

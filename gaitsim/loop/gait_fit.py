@@ -79,7 +79,7 @@ def model_profile(gait: GaitParams, impact: ImpactParams) -> StrideProfile:
     """The simulator's pitch over one steady stride of ``gait`` / ``impact`` on the same phase grid (origin where
     |rate| last rose above ``settings.QUIET_RATE_DPS`` before mid foot flat)."""
     steady = dataclasses.replace(gait, stride_length_sd_m=0.0, cycle_sd_frac=0.0, pitch_sd=0.0,
-                                 stand_start_s=0.5, stand_end_s=0.5)
+                                 stand_start_s=settings.MIN_REST_S, stand_end_s=settings.MIN_REST_S)
     walk = Walk(path=paths.straight(4 * steady.stride_length_m, 0.0), gait=steady, impact=impact)
     plan = plan_stances(walk, np.random.default_rng(0))
     k = 2
@@ -98,10 +98,10 @@ def model_profile(gait: GaitParams, impact: ImpactParams) -> StrideProfile:
 def initial_guess(measured: StrideProfile) -> dict:
     """Gait events, pitch angles and rates read off the measured profile (module docstring, step 1)."""
     phase, rate, angle = measured.phase, measured.rate, measured.angle
-    late = phase > 0.6
+    late = phase > settings.HEEL_STRIKE_AFTER_PHASE
     i_ic = int(np.flatnonzero(late)[np.argmax(measured.acc_norm[late])]) if np.any(np.isfinite(measured.acc_norm)) \
         else int(np.flatnonzero(late)[np.argmin(angle[late])])
-    early = phase < phase[i_ic] - 0.15
+    early = phase < phase[i_ic] - settings.TOE_OFF_BEFORE_STRIKE_PHASE
     i_to = int(np.argmax(np.where(early, rate, -np.inf)))
     rising = np.flatnonzero((rate[:i_to] < settings.STANCE_FLOOR * rate[i_to]))
     i_ho = int(rising[-1]) if len(rising) else i_to // 2
@@ -119,7 +119,8 @@ def initial_guess(measured: StrideProfile) -> dict:
         "pitch_accel_heel_strike_dps2": accel[i_ic],
         "pitch_toe_off_deg": angle[i_to], "pitch_rate_toe_off_dps": rate[i_to], "pitch_accel_toe_off_dps2": accel[i_to],
         "slap_rate_dps": max(rate[i_slap], 0.0),
-        "slap_duration_s": min((1.0 - phase[i_slap] + phase[i_ff]) * period, 0.7 * rocker_frac * period),
+        "slap_duration_s": min((1.0 - phase[i_slap] + phase[i_ff]) * period,
+                               settings.MAX_SLAP_ROCKER_SHARE * rocker_frac * period),
     }
 
 
@@ -167,7 +168,8 @@ def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactP
         starts[label] = np.clip(x, low + inside, high - inside)
         costs[label] = float(np.sum(cost(starts[label]) ** 2))
     origin = min(costs, key=costs.get)
-    found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low, diff_step=1e-3,
+    found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low,
+                          diff_step=settings.PITCH_FIT_DIFF_STEP,
                           max_nfev=settings.MAX_EVALUATIONS)
     best = found.x if np.sum(found.fun ** 2) <= costs[origin] else starts[origin]
     g, i = _apply(dict(zip(names, best)), gait, impact)
@@ -175,7 +177,8 @@ def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactP
                "impact": {n: float(x) for (n, sec, _, _), x in zip(settings.PITCH_FIT_BOUNDS, best) if sec == "impact"}}
     changes["gait"]["swing_frac"] = float(g.swing_frac)
     model = model_profile(g, i)
-    quality = {"start": origin, "rms_misfit_at_starts": {k: float(np.sqrt(v / (settings.PROFILE_POINTS + 2))) for k, v in costs.items()},
+    quality = {"start": origin,
+               "rms_misfit_at_starts": {k: float(np.sqrt(v / (settings.PROFILE_POINTS + 2))) for k, v in costs.items()},
                "rms_rate_misfit_fit_dps": float(np.sqrt(np.mean((model.rate - measured.rate) ** 2))),
                "pitch_extremes_measured_deg": extremes.tolist(),
                "pitch_extremes_twin_deg": [float(model.angle.max()), float(model.angle.min())]}

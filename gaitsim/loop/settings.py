@@ -28,6 +28,8 @@ ONSET_HF_EDGE_HZ = 30.0  # Hz, high-pass edge of |a| for onset_hf
 ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is taken
 BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate
 REST_ACC_NORM_SD_FLOOR = 1e-4  # m/s^2, least sample spread of |f| at rest (a quantised sensor can read one value)
+MIN_TRACK_SAMPLES = 10  # finite position-track samples needed for stance_velocity
+MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives no forward direction (no stance_velocity)
 
 # -- residuals (gaitsim.loop.residuals) ----------------------------------------------------------------------
 NOISE_LEVEL = 3.0  # 1, a residual with |value| <= NOISE_LEVEL x uncertainty is at the noise level
@@ -57,6 +59,10 @@ ANGLE_WEIGHT = 10.0  # deg/s of rate misfit per degree of pitch-extreme misfit
 MAX_EVALUATIONS = 600  # least-squares evaluations of the pitch fit
 MIN_SWING_FRAC = 0.25  # 1, smallest swing share of the gait cycle the fit may reach
 STANCE_FLOOR = 0.1  # 1, heel off: where the rate first exceeds this share of the push-off peak
+HEEL_STRIKE_AFTER_PHASE = 0.6  # 1, the heel strike is looked for after this share of the stride (from the onset)
+TOE_OFF_BEFORE_STRIKE_PHASE = 0.15  # 1, the toe off is looked for at least this share of the stride before it
+MAX_SLAP_ROCKER_SHARE = 0.7  # 1, the first guess of the forefoot slap lasts at most this share of the heel rocker
+PITCH_FIT_DIFF_STEP = 1e-3  # 1, relative finite-difference step of the pitch fit's Jacobian
 # (scenario key, section, low, high in the key's unit): what the pitch fit varies; swing_frac = 1 - the stance
 # fractions
 PITCH_FIT_BOUNDS = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", "gait", 0.05, 0.5),
@@ -88,6 +94,7 @@ DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
 MAX_ROUNDS = 20  # residuals acted on per recording at most
 GRID_POINTS = 9  # grid of each effect's magnitude search before the Brent refinement
 BRENT_ITERATIONS = 12  # iterations of the bounded Brent refinement
+BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its bracket
 
 # -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
 BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case

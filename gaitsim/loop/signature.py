@@ -169,7 +169,7 @@ def _stance_velocity(t: np.ndarray, pos_t: np.ndarray, pos: np.ndarray, strides:
                      stances: np.ndarray) -> np.ndarray:
     """Per stride, mean forward velocity (m/s) of a position track over the middle third of the stance."""
     ok = np.all(np.isfinite(pos), axis=1)
-    if ok.sum() < 10:
+    if ok.sum() < settings.MIN_TRACK_SAMPLES:
         return np.full(len(strides), math.nan)
     pt, pp = pos_t[ok], pos[ok]
     out = np.full(len(strides), math.nan)
@@ -181,7 +181,7 @@ def _stance_velocity(t: np.ndarray, pos_t: np.ndarray, pos: np.ndarray, strides:
         here = np.array([np.interp(t_mid, pt, pp[:, i]) for i in range(2)])
         there = np.array([np.interp(t_next, pt, pp[:, i]) for i in range(2)])
         step = there - here
-        if np.hypot(*step) < 0.2:
+        if np.hypot(*step) < settings.MIN_TRACK_STRIDE_M:
             continue
         forward = step / np.hypot(*step)
         third = (t[c1 - 1] - t[c0]) / 3.0
