@@ -71,7 +71,8 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
     rec0 = simulate_walk(scenario_from_dict(doc, "cycle analysis"), seed=scenario.seed, run=0)
     tracker = TrackerSpec(exp.tracker_rate_hz, exp.tracker_resolution_m, exp.tracker_noise_m)
     thresholds = sorted(set(exp.fig4_thresholds) | set(exp.threshold_sweep))
-    avg = cycle_averages(rec0, exp.cycle_count, nav.sigma_a_mps2, np.deg2rad(nav.sigma_g_dps), nav.window,
+    detector = nav.options()  # the [nav] detector settings in SI (converted once there)
+    avg = cycle_averages(rec0, exp.cycle_count, detector.sigma_a, detector.sigma_g, detector.window,
                          thresholds, tracker, np.random.default_rng([scenario.seed, 7]))
     stance_s = detected_stance_s(avg)
     strides = results[0]["walk"]["strides"]
