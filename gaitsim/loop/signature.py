@@ -54,6 +54,8 @@ from . import settings
 from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+PER_STRIDE = ("stance_gyro", "stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_acc_spread", "stance_duration",
+              "stance_shoe", "acc_peak", "gyr_peak", "hf40", "hf80", "onset_hf", "swing_axis_yaw")  # scalars per stride
 
 
 @dataclass
@@ -220,51 +222,76 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
         raise ValueError(f"signature: only {len(strides)} regular strides found (need 3); stance runs: "
                          f"{len(stances_all)}")
     acc_norm = np.linalg.norm(acc, axis=1)
-    gyr_norm = np.linalg.norm(gyr, axis=1)
     log_stat = np.log10(np.maximum(result.statistic, 1e-12))
-    per = {k: [] for k in ("stance_gyro", "stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_acc_spread", "stance_duration", "stance_shoe", "acc_peak",
-                           "gyr_peak", "hf40", "hf80", "onset_hf", "swing_axis_yaw")}
-    curves = []
-    spectra = []
-    n_fft = int(2 ** np.ceil(np.log2(np.median(strides[:, 1] - strides[:, 0]))))
-    for (s0, s1), (c0, c1) in zip(strides, stances):
-        third = (c1 - c0) // 3
-        core = slice(c0 + third, c1 - third) if c1 - c0 >= 6 else slice(c0, c1)
-        per["stance_gyro"].append(np.degrees(gyr_norm[core].mean()))
-        for axis, mean_rate in zip("xyz", np.degrees(gyr[core].mean(0))):
-            per[f"stance_rate_{axis}"].append(mean_rate)
-        per["stance_acc_spread"].append(float(np.sqrt(np.mean(np.sum((acc[core] - acc[core].mean(0)) ** 2, 1)))))
-        per["stance_duration"].append(t[c1 - 1] - t[c0])
-        inside = log_stat[c0:min(c1, len(log_stat))]
-        per["stance_shoe"].append(float(np.median(inside)) if inside.size else math.nan)
-        per["acc_peak"].append(acc_norm[s0:s1].max())
-        per["gyr_peak"].append(np.degrees(gyr_norm[s0:s1].max()))
-        for edge, key in zip(settings.HF_EDGES_HZ, ("hf40", "hf80")):
-            per[key].append(_band_share(acc_norm[s0:s1], rate, edge) if rate / 2 > settings.HF_NYQUIST_MARGIN * edge
-                            else math.nan)
-        if rate / 2 > settings.HF_NYQUIST_MARGIN * settings.ONSET_HF_EDGE_HZ:
-            high = _band_pass(acc_norm[s0:s1], rate, (settings.ONSET_HF_EDGE_HZ, np.inf))
-            per["onset_hf"].append(float(np.sqrt(np.mean(high[:max(2, int(settings.ONSET_WINDOW_S * rate))] ** 2))))
-        curves.append(_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate))
-        per["swing_axis_yaw"].append(_swing_axis_yaw(gyr[s0:s1]))
-        seg = acc_norm[s0:s1] - acc_norm[s0:s1].mean()
-        spec = np.abs(np.fft.rfft(seg, n_fft)) ** 2
-        spectra.append(spec / max(spec[1:].sum(), 1e-30))
+    per = {k: [] for k in PER_STRIDE}
+    for stride, stance in zip(strides, stances):
+        for key, value in {**_stance_statistics(t, acc, gyr, log_stat, stance),
+                           **_stride_statistics(acc_norm, gyr, rate, stride)}.items():
+            per[key].append(value)
     scalars = {k: mean_se(v) for k, v in per.items()}
     if pos is not None and pos_t is not None:
         scalars["stance_velocity"] = mean_se(_stance_velocity(t, np.asarray(pos_t, float), np.asarray(pos, float),
                                                                strides, stances))
-    rest = stances_all[0]
-    rest_acc = acc[rest[0]:rest[1]]
+    scalars["rest_acc_norm"] = _rest_acc_norm(acc[stances_all[0][0]:stances_all[0][1]])
+    curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
+    return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
+                     _spectrum(acc_norm, strides, rate), curves, result.stationary, float(gravity))
+
+
+def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat: np.ndarray,
+                       stance: np.ndarray) -> dict:
+    """The stance statistics of one stride (module docstring) over its detected stance [c0, c1)."""
+    c0, c1 = stance
+    third = (c1 - c0) // 3
+    core = slice(c0 + third, c1 - third) if c1 - c0 >= 6 else slice(c0, c1)
+    rates = np.degrees(gyr[core].mean(0))
+    inside = log_stat[c0:min(c1, len(log_stat))]
+    return {"stance_gyro": np.degrees(np.linalg.norm(gyr[core], axis=1).mean()),
+            "stance_rate_x": rates[0], "stance_rate_y": rates[1], "stance_rate_z": rates[2],
+            "stance_acc_spread": float(np.sqrt(np.mean(np.sum((acc[core] - acc[core].mean(0)) ** 2, 1)))),
+            "stance_duration": t[c1 - 1] - t[c0],
+            "stance_shoe": float(np.median(inside)) if inside.size else math.nan}
+
+
+def _stride_statistics(acc_norm: np.ndarray, gyr: np.ndarray, rate: float, stride: np.ndarray) -> dict:
+    """The whole-stride statistics of one stride [s0, s1) (module docstring); the high-frequency ones only where
+    the sample rate resolves their band."""
+    s0, s1 = stride
+    a = acc_norm[s0:s1]
+    out = {"acc_peak": a.max(), "gyr_peak": np.degrees(np.linalg.norm(gyr[s0:s1], axis=1).max())}
+    for edge, key in zip(settings.HF_EDGES_HZ, ("hf40", "hf80")):
+        out[key] = _band_share(a, rate, edge) if rate / 2 > settings.HF_NYQUIST_MARGIN * edge else math.nan
+    if rate / 2 > settings.HF_NYQUIST_MARGIN * settings.ONSET_HF_EDGE_HZ:
+        high = _band_pass(a, rate, (settings.ONSET_HF_EDGE_HZ, np.inf))
+        out["onset_hf"] = float(np.sqrt(np.mean(high[:max(2, int(settings.ONSET_WINDOW_S * rate))] ** 2)))
+    out["swing_axis_yaw"] = _swing_axis_yaw(gyr[s0:s1])
+    return out
+
+
+def _rest_acc_norm(rest_acc: np.ndarray) -> Scalar:
+    """|mean specific force| (m/s^2) over the first detected rest; its uncertainty the samples' spread (at least
+    ``settings.REST_ACC_NORM_SD_FLOOR``) / sqrt(samples)."""
     norm_samples = np.linalg.norm(rest_acc, axis=1)
-    scalars["rest_acc_norm"] = Scalar(float(np.linalg.norm(rest_acc.mean(0))),
-                                      float(max(norm_samples.std(ddof=1), settings.REST_ACC_NORM_SD_FLOOR) / math.sqrt(len(rest_acc))),
-                                      norm_samples)
+    spread = max(norm_samples.std(ddof=1), settings.REST_ACC_NORM_SD_FLOOR)
+    return Scalar(float(np.linalg.norm(rest_acc.mean(0))), float(spread / math.sqrt(len(rest_acc))), norm_samples)
+
+
+def _profiles(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, strides: np.ndarray) -> dict:
+    """Channel -> :class:`Profile` of the six channels (acc m/s^2, gyr deg/s) on the stride phase grid."""
     resampled = phase_resample(t, np.column_stack([acc, np.degrees(gyr)]), strides)  # (S, P, 6), CHANNELS order
     profiles = {}
     for i, c in enumerate(CHANNELS):
         x = resampled[:, :, i]
         profiles[c] = Profile(x.mean(0), x.std(0, ddof=1) / math.sqrt(len(x)), x)
-    spectrum = (np.fft.rfftfreq(n_fft, 1.0 / rate), np.mean(spectra, axis=0))
-    return Signature(scalars, profiles, strides, stances, rate, spectrum, np.array(curves), result.stationary,
-                     float(gravity))
+    return profiles
+
+
+def _spectrum(acc_norm: np.ndarray, strides: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """(frequencies Hz, mean over strides of the |a| power spectrum, each stride's normalised to unit total)."""
+    n_fft = int(2 ** np.ceil(np.log2(np.median(strides[:, 1] - strides[:, 0]))))
+    spectra = []
+    for s0, s1 in strides:
+        seg = acc_norm[s0:s1] - acc_norm[s0:s1].mean()
+        spec = np.abs(np.fft.rfft(seg, n_fft)) ** 2
+        spectra.append(spec / max(spec[1:].sum(), 1e-30))
+    return np.fft.rfftfreq(n_fft, 1.0 / rate), np.mean(spectra, axis=0)
