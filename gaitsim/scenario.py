@@ -165,7 +165,7 @@ def section_table(obj, digits: int | None = WRITTEN_DIGITS) -> dict:
     return out
 
 
-def _shown(obj, key: str):
+def _in_key_units(obj, key: str):
     """Value of scenario key ``key`` of ``obj`` in the key's unit (for error messages)."""
     return section_table(obj)[key]
 
@@ -188,12 +188,12 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
              "heel_rocker_frac + foot_flat_frac + push_off_frac + swing_frac must add up to 1")
     for key, value in (("stride_length_sd_m", g.stride_length_sd_m), ("cycle_sd_frac", g.cycle_sd_frac),
                        ("pitch_sd_deg", g.pitch_sd), ("swing_height_m", g.swing_height_m)):
-        _require(value >= 0, f"{where} [gait]", key, _shown(g, key), "must be >= 0")
+        _require(value >= 0, f"{where} [gait]", key, _in_key_units(g, key), "must be >= 0")
     for k in ("stand_start_s", "stand_end_s"):
         _require(getattr(g, k) >= 0.5, f"{where} [gait]", k, getattr(g, k), "must be >= 0.5 s (the filter aligns on it)")
-    _require(g.pitch_heel_strike < 0, f"{where} [gait]", "pitch_heel_strike_deg", _shown(g, "pitch_heel_strike_deg"),
+    _require(g.pitch_heel_strike < 0, f"{where} [gait]", "pitch_heel_strike_deg", _in_key_units(g, "pitch_heel_strike_deg"),
              "must be < 0 (toes up at heel strike)")
-    _require(g.pitch_toe_off > 0, f"{where} [gait]", "pitch_toe_off_deg", _shown(g, "pitch_toe_off_deg"),
+    _require(g.pitch_toe_off > 0, f"{where} [gait]", "pitch_toe_off_deg", _in_key_units(g, "pitch_toe_off_deg"),
              "must be > 0 (heel up)")
     _require(g.cycle_sd_frac < 0.2, f"{where} [gait]", "cycle_sd_frac", g.cycle_sd_frac, "must be < 0.2")
     rocker = g.heel_rocker_frac * g.cycle_s
@@ -201,7 +201,7 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
              f"must be > 0 and < 80% of the heel rocker ({rocker:.3f} s)")
     _require(0 < imp.heel_strike_duration_s < rocker - imp.slap_duration_s, f"{where} [impact]",
              "heel_strike_duration_s", imp.heel_strike_duration_s, "must be > 0 and end before the forefoot slap")
-    _require(imp.slap_rate >= 0, f"{where} [impact]", "slap_rate_dps", _shown(imp, "slap_rate_dps"), "must be >= 0")
+    _require(imp.slap_rate >= 0, f"{where} [impact]", "slap_rate_dps", _in_key_units(imp, "slap_rate_dps"), "must be >= 0")
     _require(imp.ringing_hz >= 0, f"{where} [impact]", "ringing_hz", imp.ringing_hz, "must be >= 0 (0 = off)")
     _require(0 < imp.ringing_damping < 1, f"{where} [impact]", "ringing_damping", imp.ringing_damping, "must lie in (0, 1)")
     if imp.ringing_hz > 0:
@@ -220,7 +220,7 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
     flat = g.foot_flat_frac * g.cycle_s
     if any(mm.stance_rotation_rate):
         _require(2 * mm.creep_ramp_s < flat, f"{where} [micromotion]", "stance_rotation_dps",
-                 _shown(mm, "stance_rotation_dps"), f"needs a foot flat ({flat:.3f} s) longer than two creep ramps "
+                 _in_key_units(mm, "stance_rotation_dps"), f"needs a foot flat ({flat:.3f} s) longer than two creep ramps "
                                                     f"(2 x creep_ramp_s = {2 * mm.creep_ramp_s:.3f} s)")
 
 
