@@ -2,7 +2,7 @@
 
     python benchmarks/nav_speed.py [--repeats 3] [--runs 64]
 
-Recording: the simulator's 99.6 m straight walk (scenarios/straight_100m.toml, 800 Hz) when gaitsim.truth is
+Recording: the simulator's 99.6 m straight walk (scenarios/straight_100m.toml, 800 Hz) when gaitsim.simulate is
 available, else a synthetic 75 s, 800 Hz walk-like signal. Both filters get the same point samples (ours: RK4
 mechanisation) and run their own zero-velocity detector; times include detection. Compile time is excluded
 (one warm-up call each). gaitmap is an optional extra (``pip install .[bench]``); without it only our numbers
@@ -36,9 +36,9 @@ def load_recording() -> tuple[Recording, str]:
     """The simulator's 99.6 m walk, or a synthetic walk-like signal when the simulator is absent."""
     try:
         from gaitsim.scenario import load_scenario
-        from gaitsim.truth import simulate_walk
+        from gaitsim.simulate import simulate_walk
     except ImportError:
-        return synthetic_recording(), "synthetic 75 s walk-like signal, 800 Hz (gaitsim.truth not installed)"
+        return synthetic_recording(), "synthetic 75 s walk-like signal, 800 Hz (gaitsim.simulate not installed)"
     rec = simulate_walk(load_scenario(ROOT / "scenarios" / "straight_100m.toml"), seed=1)
     return rec, f"gaitsim straight_100m (99.6 m, {rec.t[-1]:.1f} s, 800 Hz, ideal sensor)"
 

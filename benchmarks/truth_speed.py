@@ -10,7 +10,7 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 from gaitsim.scenario import load_scenario  # noqa: E402
-from gaitsim.truth import run_generators, simulate_truth  # noqa: E402
+from gaitsim.simulate import simulate_world  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -20,7 +20,7 @@ def main() -> None:
     best = float("inf")
     for _ in range(3):
         t0 = time.perf_counter()
-        truth, _, _ = simulate_truth(scenario, run_generators(scenario.seed)[0])
+        truth, _, _ = simulate_world(scenario, scenario.seed)
         best = min(best, time.perf_counter() - t0)
     simulated = truth.t[-1]
     print(f"truth of the 99.6 m walk: {len(truth.t)} samples at {scenario.rate_hz:.0f} Hz, {simulated:.1f} s simulated")

@@ -3,21 +3,21 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
 from nav import command as nav_command
 
 from .errors import ScenarioError
+from .experiments import command as experiments_command
+from .loop import command as loop_command
+from .scenario import load_scenario
+from .simulate import generate, summary
 
-# subcommands living in their own modules; each exposes add_parser(subparsers) and run(args) -> int
-PLUGGED = ("gaitsim.experiments.command", "gaitsim.loop.command")
+# subcommands living in their own modules; each exposes add_parser(subparsers)
+SUBCOMMANDS = (nav_command, experiments_command, loop_command)
 
 
 def _generate(args) -> int:
-    from .generate import generate, summary
-    from .scenario import load_scenario
-
     scenario = load_scenario(args.scenario)
     recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force)
     print(summary(recs[0]))
@@ -38,14 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--runs", type=int, default=None, help="number of runs (default: the scenario's)")
     gen.add_argument("--force", action="store_true", help="replace an existing output folder")
     gen.set_defaults(func=_generate)
-    nav_command.add_parser(sub)
-    for name in PLUGGED:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name is not None and name.startswith(exc.name):
-                continue  # that part of the project is not installed in this version
-            raise
+    for module in SUBCOMMANDS:
         module.add_parser(sub)
     return parser
 

@@ -1,4 +1,8 @@
-"""Scenario files (TOML): load, validate, and turn into a :class:`Scenario`.
+"""Scenario files (TOML): load, validate, and turn into a :class:`Scenario`; and back into TOML-shaped documents.
+
+This module is the world's unit boundary: scenario keys carry their unit in the name (``pitch_toe_off_deg``,
+``slap_rate_dps``, ...), the objects hold SI values under unit-free names (``GaitParams.pitch_toe_off`` in rad),
+converted here once (:data:`IN_DEGREES`); :func:`scenario_document` writes the keys and units back.
 
 Sections and keys (every key optional unless marked; units in the key names):
 
@@ -8,13 +12,14 @@ Sections and keys (every key optional unless marked; units in the key names):
                 arc:      radius_m (>= one step), turn_deg (signed, left positive), yaw_deg, start_m
                 polyline: waypoints_m [[x, y], ...] (>= 2), corner_radius_m (>= one step), closed (bool)
                 static:   duration_s (>0)
-``[gait]``      fields of :class:`gaitsim.gait.GaitParams`
-``[impact]``    fields of :class:`gaitsim.gait.ImpactParams`
-``[micromotion]`` fields of :class:`gaitsim.gait.MicroMotionParams`
-``[mount]``     fields of :class:`gaitsim.foot.Mount`
-``[sampling]``  rate_hz (>0, default 800), gravity_mps2 (>0, default 9.81)
+``[gait]``      fields of :class:`gaitsim.world.gait.GaitParams`, angles in deg (``_deg``, ``_dps``, ``_dps2``)
+``[impact]``    fields of :class:`gaitsim.world.gait.ImpactParams`, likewise
+``[micromotion]`` fields of :class:`gaitsim.world.gait.MicroMotionParams`, likewise
+``[mount]``     fields of :class:`gaitsim.world.foot.Mount`, likewise
+``[sampling]``  rate_hz (>0, default 800), gravity_mps2 (>0, default nav's 9.81)
 ``[sensor]``    handed to :func:`gaitsim.imu.config.sensor_from_table` (absent: the ideal sensor)
-``[nav]``, ``[experiment]``  kept as tables for the filter and the experiment runner, which validate them.
+``[nav]``, ``[experiment]``, ``[targets]``  kept as tables for the filter and the experiment runner (which
+                validates them; ``[targets]`` holds the numbers a reproduction is measured against).
 
 Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
 key, the value and what is allowed; nothing is written.
@@ -23,16 +28,36 @@ key, the value and what is allowed; nothing is written.
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from . import path as paths
+from nav.constants import DEFAULT_GRAVITY
+
 from .errors import ScenarioError
-from .foot import MOUNTS, Mount
-from .gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+from .imu.config import changed_sensor, sensor_from_table, sensor_table
+from .imu.model import SensorSpec
+from .world import path as paths
+from .world.foot import MOUNTS, Mount
+from .world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+
+DEG = math.pi / 180.0  # rad per deg (deg/s and deg/s^2 convert alike)
+# scenario key (unit in its name) -> field of the world's dataclass that holds the quantity in SI (rad, rad/s, rad/s^2)
+IN_DEGREES = {
+    GaitParams: {"pitch_heel_strike_deg": "pitch_heel_strike", "pitch_rate_heel_strike_dps": "pitch_rate_heel_strike",
+                 "pitch_accel_heel_strike_dps2": "pitch_accel_heel_strike", "pitch_toe_off_deg": "pitch_toe_off",
+                 "pitch_rate_toe_off_dps": "pitch_rate_toe_off", "pitch_accel_toe_off_dps2": "pitch_accel_toe_off",
+                 "swing_roll_deg": "swing_roll", "toe_out_deg": "toe_out", "pitch_sd_deg": "pitch_sd"},
+    ImpactParams: {"slap_rate_dps": "slap_rate"},
+    MicroMotionParams: {"stance_roll_rate_dps": "stance_roll_rate", "stance_rotation_dps": "stance_rotation_rate"},
+    Mount: {"rpy_deg": "rpy"},
+}
+WORLD_SECTIONS = {"gait": GaitParams, "impact": ImpactParams, "micromotion": MicroMotionParams, "mount": Mount}
+WRITTEN_DIGITS = 15  # significant digits of a converted value written back (the deg -> rad -> deg round trip is
+# exact to them)
 
 PATH_KEYS = {
     "straight": {"kind", "length_m", "yaw_deg", "start_m"},
@@ -40,29 +65,30 @@ PATH_KEYS = {
     "polyline": {"kind", "waypoints_m", "corner_radius_m", "closed"},
     "static": {"kind", "duration_s"},
 }
-SECTIONS = {"scenario", "path", "gait", "impact", "micromotion", "mount", "sampling", "sensor", "nav", "experiment"}
+SECTIONS = {"scenario", "path", "gait", "impact", "micromotion", "mount", "sampling", "sensor", "nav", "experiment",
+            "targets"}
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """A validated scenario: the walk, the mount, sampling and the (unparsed-here) sensor and nav tables."""
+    """A validated scenario in SI: the walk, the mount, sampling (Hz, m/s^2), the sensor (None: ideal), and the
+    [path] table as given (for the metadata) and the [nav], [experiment], [targets] tables (validated by their
+    users)."""
 
     name: str
     walk: Walk
     mount: Mount = field(default_factory=Mount)
     rate_hz: float = 800.0
-    gravity: float = 9.81
+    gravity: float = DEFAULT_GRAVITY
     seed: int = 0
     runs: int = 1
     description: str = ""
     path_table: dict = field(default_factory=dict)
-    sensor: object | None = None  # gaitsim.imu.config.SensorSpec
+    sensor: SensorSpec | None = None
     nav: dict = field(default_factory=dict)
     experiment: dict = field(default_factory=dict)
+    targets: dict = field(default_factory=dict)
     source: str = ""
-
-    def with_seed(self, seed: int) -> "Scenario":
-        return dataclasses.replace(self, seed=seed)
 
 
 def _is_number(v) -> bool:
@@ -94,16 +120,54 @@ def _check_type(where: str, key: str, value, default):
     raise TypeError(f"no type rule for {key}")
 
 
-def fill(cls, table: dict, where: str):
-    """Build dataclass ``cls`` from a TOML table, refusing unknown keys and wrong types."""
-    defaults = cls()
-    names = {f.name for f in dataclasses.fields(cls)}
+def scenario_keys(cls) -> dict[str, str]:
+    """Scenario key -> field name of the dataclass ``cls`` (keys in degrees name their SI field, others are equal)."""
+    field_key = {name: key for key, name in IN_DEGREES.get(cls, {}).items()}
+    return {field_key.get(f.name, f.name): f.name for f in dataclasses.fields(cls)}
+
+
+def _scaled(value, factor: float):
+    return tuple(x * factor for x in value) if isinstance(value, tuple) else value * factor
+
+
+def fill(cls, table: dict, where: str, base=None):
+    """Dataclass ``cls`` from a TOML table (keys in the table's units, converted to SI), on top of ``base``
+    (default ``cls()``); unknown keys and wrong types are refused."""
+    base = cls() if base is None else base
+    keys = scenario_keys(cls)
     values = {}
     for key, value in table.items():
-        if key not in names:
-            raise ScenarioError(f"{where}: unknown key {key!r}; allowed: {', '.join(sorted(names))}")
-        values[key] = _check_type(where, key, value, getattr(defaults, key))
-    return dataclasses.replace(defaults, **values)
+        if key not in keys:
+            raise ScenarioError(f"{where}: unknown key {key!r}; allowed: {', '.join(sorted(keys))}")
+        name = keys[key]
+        checked = _check_type(where, key, value, getattr(base, name))
+        values[name] = _scaled(checked, DEG) if name != key else checked
+    return dataclasses.replace(base, **values)
+
+
+def _from_degrees(value, digits: int | None):
+    """A value in rad (or a tuple of them) in deg, rounded to ``digits`` significant digits (None: not rounded)."""
+    if isinstance(value, tuple):
+        return tuple(_from_degrees(x, digits) for x in value)
+    value = value / DEG
+    return value if digits is None else float(f"{value:.{digits}g}")
+
+
+def section_table(obj, digits: int | None = WRITTEN_DIGITS) -> dict:
+    """The TOML table of a world dataclass: every field under its scenario key, in that key's unit; converted
+    values rounded to ``digits`` significant digits (None: full precision, for computing with them)."""
+    out = {}
+    for key, name in scenario_keys(type(obj)).items():
+        value = getattr(obj, name)
+        if name != key:
+            value = _from_degrees(value, digits)
+        out[key] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def _in_key_units(obj, key: str):
+    """Value of scenario key ``key`` of ``obj`` in the key's unit (for error messages)."""
+    return section_table(obj)[key]
 
 
 def _require(cond: bool, where: str, key: str, value, allowed: str):
@@ -112,7 +176,8 @@ def _require(cond: bool, where: str, key: str, value, allowed: str):
 
 
 def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where: str) -> None:
-    """Physical plausibility of the gait, impact and micro-motion parameters."""
+    """Physical plausibility of the gait, impact and micro-motion parameters (SI objects; errors name the
+    scenario keys and their values in the keys' units)."""
     _require(g.cadence_steps_per_min > 0, f"{where} [gait]", "cadence_steps_per_min", g.cadence_steps_per_min, "must be > 0")
     _require(g.stride_length_m > 0, f"{where} [gait]", "stride_length_m", g.stride_length_m, "must be > 0")
     fracs = {k: getattr(g, k) for k in ("heel_rocker_frac", "foot_flat_frac", "push_off_frac", "swing_frac")}
@@ -121,20 +186,22 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
     total = sum(fracs.values())
     _require(abs(total - 1) < 1e-9, f"{where} [gait]", "phase fractions", total,
              "heel_rocker_frac + foot_flat_frac + push_off_frac + swing_frac must add up to 1")
-    for k in ("stride_length_sd_m", "cycle_sd_frac", "pitch_sd_deg", "swing_height_m"):
-        _require(getattr(g, k) >= 0, f"{where} [gait]", k, getattr(g, k), "must be >= 0")
+    for key, value in (("stride_length_sd_m", g.stride_length_sd_m), ("cycle_sd_frac", g.cycle_sd_frac),
+                       ("pitch_sd_deg", g.pitch_sd), ("swing_height_m", g.swing_height_m)):
+        _require(value >= 0, f"{where} [gait]", key, _in_key_units(g, key), "must be >= 0")
     for k in ("stand_start_s", "stand_end_s"):
         _require(getattr(g, k) >= 0.5, f"{where} [gait]", k, getattr(g, k), "must be >= 0.5 s (the filter aligns on it)")
-    _require(g.pitch_heel_strike_deg < 0, f"{where} [gait]", "pitch_heel_strike_deg", g.pitch_heel_strike_deg,
+    _require(g.pitch_heel_strike < 0, f"{where} [gait]", "pitch_heel_strike_deg", _in_key_units(g, "pitch_heel_strike_deg"),
              "must be < 0 (toes up at heel strike)")
-    _require(g.pitch_toe_off_deg > 0, f"{where} [gait]", "pitch_toe_off_deg", g.pitch_toe_off_deg, "must be > 0 (heel up)")
+    _require(g.pitch_toe_off > 0, f"{where} [gait]", "pitch_toe_off_deg", _in_key_units(g, "pitch_toe_off_deg"),
+             "must be > 0 (heel up)")
     _require(g.cycle_sd_frac < 0.2, f"{where} [gait]", "cycle_sd_frac", g.cycle_sd_frac, "must be < 0.2")
     rocker = g.heel_rocker_frac * g.cycle_s
     _require(0 < imp.slap_duration_s < 0.8 * rocker, f"{where} [impact]", "slap_duration_s", imp.slap_duration_s,
              f"must be > 0 and < 80% of the heel rocker ({rocker:.3f} s)")
     _require(0 < imp.heel_strike_duration_s < rocker - imp.slap_duration_s, f"{where} [impact]",
              "heel_strike_duration_s", imp.heel_strike_duration_s, "must be > 0 and end before the forefoot slap")
-    _require(imp.slap_rate_dps >= 0, f"{where} [impact]", "slap_rate_dps", imp.slap_rate_dps, "must be >= 0")
+    _require(imp.slap_rate >= 0, f"{where} [impact]", "slap_rate_dps", _in_key_units(imp, "slap_rate_dps"), "must be >= 0")
     _require(imp.ringing_hz >= 0, f"{where} [impact]", "ringing_hz", imp.ringing_hz, "must be >= 0 (0 = off)")
     _require(0 < imp.ringing_damping < 1, f"{where} [impact]", "ringing_damping", imp.ringing_damping, "must lie in (0, 1)")
     if imp.ringing_hz > 0:
@@ -151,14 +218,14 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
              "stance_rotation_pivot_frac", list(mm.stance_rotation_pivot_frac),
              "both (pitch, yaw) pivots must lie in [0, 1] (0 = heel contact, 1 = toe contact)")
     flat = g.foot_flat_frac * g.cycle_s
-    if any(mm.stance_rotation_dps):
+    if any(mm.stance_rotation_rate):
         _require(2 * mm.creep_ramp_s < flat, f"{where} [micromotion]", "stance_rotation_dps",
-                 list(mm.stance_rotation_dps), f"needs a foot flat ({flat:.3f} s) longer than two creep ramps "
-                                               f"(2 x creep_ramp_s = {2 * mm.creep_ramp_s:.3f} s)")
+                 _in_key_units(mm, "stance_rotation_dps"), f"needs a foot flat ({flat:.3f} s) longer than two creep ramps "
+                                                    f"(2 x creep_ramp_s = {2 * mm.creep_ramp_s:.3f} s)")
 
 
 def build_path(table: dict, gait: GaitParams, where: str):
-    """The :class:`gaitsim.path.Path` of a [path] table (None for ``static``) and the static duration (s)."""
+    """The :class:`gaitsim.world.path.Path` of a [path] table (None for ``static``) and the static duration (s)."""
     kind = table.get("kind")
     _require(kind in PATH_KEYS, where, "kind", kind, f"allowed: {', '.join(PATH_KEYS)}")
     for key in table:
@@ -228,32 +295,89 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     impact = fill(ImpactParams, doc.get("impact", {}), f"{source} [impact]")
     micro = fill(MicroMotionParams, doc.get("micromotion", {}), f"{source} [micromotion]")
     validate_gait(gait, impact, micro, source)
-    mount = fill(Mount, doc.get("mount", {}), f"{source} [mount]")
-    _require(mount.site in MOUNTS, f"{source} [mount]", "site", mount.site, f"allowed: {', '.join(MOUNTS)}")
-    sampling = doc.get("sampling", {})
-    for key in sampling:
-        _require(key in ("rate_hz", "gravity_mps2"), f"{source} [sampling]", key, sampling[key],
-                 "unknown key; allowed: gravity_mps2, rate_hz")
-    rate = _check_type(f"{source} [sampling]", "rate_hz", sampling.get("rate_hz", 800.0), 0.0)
-    gravity = _check_type(f"{source} [sampling]", "gravity_mps2", sampling.get("gravity_mps2", 9.81), 0.0)
-    _require(rate >= 50, f"{source} [sampling]", "rate_hz", rate, "must be >= 50 Hz")
-    _require(gravity > 0, f"{source} [sampling]", "gravity_mps2", gravity, "must be > 0")
+    mount = _mount(doc.get("mount", {}), Mount(), source)
+    rate, gravity = _sampling(doc.get("sampling", {}), 800.0, DEFAULT_GRAVITY, source)
 
     if "path" not in doc:
         raise ScenarioError(f"{source}: missing section [path] (kind = straight | arc | polyline | static)")
     path, duration = build_path(doc["path"], gait, f"{source} [path]")
-    sensor = None
-    if "sensor" in doc:
-        from .imu.config import sensor_from_table
-
-        sensor = sensor_from_table(doc["sensor"], where=f"{source} [sensor]")
+    sensor = sensor_from_table(doc["sensor"], where=f"{source} [sensor]") if "sensor" in doc else None
     return Scenario(
         name=name, walk=Walk(path=path, gait=gait, impact=impact, micro=micro, duration_s=duration),
         mount=mount, rate_hz=rate, gravity=gravity, seed=seed, runs=runs,
         description=_check_type(f"{source} [scenario]", "description", head.get("description", ""), ""),
         path_table=dict(doc["path"]), sensor=sensor, nav=dict(doc.get("nav", {})),
-        experiment=dict(doc.get("experiment", {})), source=source,
+        experiment=dict(doc.get("experiment", {})), targets=dict(doc.get("targets", {})), source=source,
     )
+
+
+def _mount(table: dict, base: Mount, source: str) -> Mount:
+    mount = fill(Mount, table, f"{source} [mount]", base)
+    _require(mount.site in MOUNTS, f"{source} [mount]", "site", mount.site, f"allowed: {', '.join(MOUNTS)}")
+    return mount
+
+
+def _sampling(table: dict, rate: float, gravity: float, source: str) -> tuple[float, float]:
+    """(rate_hz, gravity m/s^2) of a [sampling] table on top of the given values."""
+    for key in table:
+        _require(key in ("rate_hz", "gravity_mps2"), f"{source} [sampling]", key, table[key],
+                 "unknown key; allowed: gravity_mps2, rate_hz")
+    rate = _check_type(f"{source} [sampling]", "rate_hz", table.get("rate_hz", rate), 0.0)
+    gravity = _check_type(f"{source} [sampling]", "gravity_mps2", table.get("gravity_mps2", gravity), 0.0)
+    _require(rate >= 50, f"{source} [sampling]", "rate_hz", rate, "must be >= 50 Hz")
+    _require(gravity > 0, f"{source} [sampling]", "gravity_mps2", gravity, "must be > 0")
+    return rate, gravity
+
+
+def with_changes(scenario: Scenario, changes: dict, source: str = "<changes>") -> Scenario:
+    """``scenario`` with TOML-shaped ``changes`` ``{section: {key: value}}`` (keys and units as in a scenario
+    file) to its [gait], [impact], [micromotion], [mount], [sampling] or [sensor] keys, validated like a file.
+
+    Raises
+    ------
+    ScenarioError
+        naming the section, key and value that cannot be used.
+    """
+    unknown = set(changes) - set(WORLD_SECTIONS) - {"sampling", "sensor"}
+    if unknown:
+        raise ScenarioError(f"{source}: sections {sorted(unknown)} cannot be changed; allowed: "
+                            f"{', '.join(sorted(WORLD_SECTIONS))}, sampling, sensor")
+    walk = scenario.walk
+    gait = fill(GaitParams, changes.get("gait", {}), f"{source} [gait]", walk.gait)
+    impact = fill(ImpactParams, changes.get("impact", {}), f"{source} [impact]", walk.impact)
+    micro = fill(MicroMotionParams, changes.get("micromotion", {}), f"{source} [micromotion]", walk.micro)
+    validate_gait(gait, impact, micro, source)
+    if walk.path is not None:
+        step = gait.stride_length_m / 2
+        _require(walk.path.min_radius >= step, f"{source} [path]", "turn radius", walk.path.min_radius,
+                 f"a turn radius must be at least one step ({step} m)")
+        _require(walk.path.length >= gait.stride_length_m, f"{source} [path]", "length", walk.path.length,
+                 f"must be at least one stride ({gait.stride_length_m} m)")
+    mount = _mount(changes.get("mount", {}), scenario.mount, source)
+    rate, gravity = _sampling(changes.get("sampling", {}), scenario.rate_hz, scenario.gravity, source)
+    sensor = scenario.sensor
+    if "sensor" in changes:
+        sensor = changed_sensor(sensor, changes["sensor"], f"{source} [sensor]")
+    return dataclasses.replace(scenario, walk=dataclasses.replace(walk, gait=gait, impact=impact, micro=micro),
+                               mount=mount, rate_hz=rate, gravity=gravity, sensor=sensor)
+
+
+def scenario_document(scenario: Scenario) -> dict:
+    """The TOML-shaped document of ``scenario`` (keys with their units; :func:`scenario_from_dict` reads it back
+    to the same scenario, its converted values to ``WRITTEN_DIGITS`` significant digits)."""
+    walk = scenario.walk
+    doc = {"scenario": {"name": scenario.name, "description": scenario.description, "seed": scenario.seed,
+                        "runs": scenario.runs},
+           "path": dict(scenario.path_table),
+           **{section: section_table(obj) for section, obj in
+              (("gait", walk.gait), ("impact", walk.impact), ("micromotion", walk.micro), ("mount", scenario.mount))},
+           "sampling": {"rate_hz": scenario.rate_hz, "gravity_mps2": scenario.gravity}}
+    if scenario.sensor is not None:
+        doc["sensor"] = sensor_table(scenario.sensor)
+    for section in ("nav", "experiment", "targets"):
+        if getattr(scenario, section):
+            doc[section] = dict(getattr(scenario, section))
+    return doc
 
 
 def load_scenario(path: str | Path) -> Scenario:

@@ -10,11 +10,10 @@ move navigation beyond the floor must leave it there.
 
 import pytest
 
-from gaitsim.loop import attribution, blind
-from gaitsim.loop.residuals import NOISE_LEVEL
+from gaitsim.loop import attribution, blind, settings
 
 _RESULTS = {}
-NAV_FLOOR_M = attribution.NAV_FLOOR["nav_final_error"]
+NAV_FLOOR_M = settings.NAV_FLOOR["nav_final_error"]
 SINGLE = [c for c in blind.CASES if len(c.truths) == 1 and c.truths[0][0] not in ("outside", "none")]
 
 
@@ -35,7 +34,7 @@ def test_single_undeclared_effect_is_named_fitted_and_closed(case):
     first = res.attributions[0]
     assert first["effect"] == effect, first
     assert first["magnitude"] == pytest.approx(magnitude, rel=0.25)
-    assert abs(first["residual_after"]) <= NOISE_LEVEL * first["uncertainty_after"], first
+    assert abs(first["residual_after"]) <= settings.NOISE_LEVEL * first["uncertainty_after"], first
     nav = _nav(res)
     assert nav["discrepancy_after"] <= max(nav["discrepancy_before"] / 3, NAV_FLOOR_M), nav
 

@@ -1,14 +1,13 @@
 """The twin's gait-shape and sensor-position fits: exact recovery where the model is exact, linearity laws."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from gaitsim.gait import GaitParams, ImpactParams
-from gaitsim.loop import gait_fit, mount_fit, residuals, twin
-from gaitsim.scenario import scenario_from_dict
-from gaitsim.truth import simulate_walk
+from gaitsim.loop import gait_fit, mount_fit, settings, twin
+from gaitsim.loop.signature import signature
+from gaitsim.scenario import fill, scenario_from_dict
+from gaitsim.simulate import simulate_walk
+from gaitsim.world.gait import GaitParams, ImpactParams
 
 SHAPE = {"heel_rocker_frac": 0.12, "foot_flat_frac": 0.28, "push_off_frac": 0.2, "swing_frac": 0.4,
          "pitch_heel_strike_deg": -24.0, "pitch_rate_heel_strike_dps": 180.0, "pitch_accel_heel_strike_dps2": 4000.0,
@@ -21,7 +20,7 @@ def test_model_profile_angle_is_the_integral_of_its_rate():
     step = model.period_s / len(model.rate)
     integral = np.concatenate([[0.0], np.cumsum(0.5 * (model.rate[1:] + model.rate[:-1]) * step)])
     np.testing.assert_allclose(model.angle, integral, atol=0.05 * np.abs(model.angle).max())
-    assert abs(model.rate[0]) <= residuals.QUIET_RATE_DPS  # the phase origin is where the rate falls quiet
+    assert abs(model.rate[0]) <= settings.QUIET_RATE_DPS  # the phase origin is where the rate falls quiet
     assert model.period_s == pytest.approx(GaitParams().cycle_s, rel=1e-3)
 
 
@@ -29,7 +28,7 @@ def test_fit_recovers_a_gait_from_its_own_profile():
     """Measured = the model of a gait far from the defaults: the fit, started from the defaults at that cadence,
     reproduces the profile and the events."""
     cadence = GaitParams(cadence_steps_per_min=100.0)
-    truth = gait_fit.model_profile(dataclasses.replace(cadence, **SHAPE), dataclasses.replace(ImpactParams(), **SLAP))
+    truth = gait_fit.model_profile(fill(GaitParams, SHAPE, "[gait]", cadence), fill(ImpactParams, SLAP, "[impact]"))
     changes, quality = gait_fit.fit_pitch_profile(truth, cadence, ImpactParams())
     # of a profile spanning -400..+300 deg/s; the fit stops in a shallow minimum (~5 deg/s) that trades the heel
     # strike rate against the slap (see below)
@@ -54,7 +53,7 @@ def test_accelerometer_profiles_are_linear_in_the_sensor_position():
 
     a, b = at([0.0, 0.0, 0.02]), at([0.2, 0.04, 0.08])
     mid = at([0.1, 0.02, 0.05])
-    strides = residuals.signature(a.t, a.acc, a.gyr).strides
+    strides = signature(a.t, a.acc, a.gyr).strides
     profiles = [mount_fit._acc_profiles(r, strides) for r in (a, b, mid)]
     np.testing.assert_allclose(profiles[2], 0.5 * (profiles[0] + profiles[1]), atol=1e-9 * np.abs(profiles[0]).max())
 
@@ -63,7 +62,7 @@ def test_sensor_position_is_recovered_on_a_heel_mounted_recording():
     doc = {"path": {"kind": "straight", "length_m": 12.0}, "sampling": {"rate_hz": 200.0},
            "gait": {"stand_start_s": 1.0, "stand_end_s": 1.0}}
     rec = simulate_walk(scenario_from_dict({**doc, "mount": {"site": "heel"}}), seed=4)
-    sig = residuals.signature(rec.t, rec.acc, rec.gyr)
+    sig = signature(rec.t, rec.acc, rec.gyr)
     g = GaitParams()
     phases = mount_fit.contact_phases(g.heel_rocker_frac, g.foot_flat_frac, g.push_off_frac)
     site, quality = mount_fit.fit_lever_arm(

@@ -7,15 +7,13 @@ that explains it, and bring it down at least 2x. Two rounds: on each foot one ot
 """
 
 import warnings
-from pathlib import Path
 
 import pytest
 
 from gaitsim.loop import attribution
+from conftest import DATA, needs_data
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-pytestmark = pytest.mark.skipif(not (DATA / "gaitmap-healthy").is_dir(),
-                                reason=f"shared measured data not found at {DATA}")
+pytestmark = needs_data("gaitmap-healthy")
 ROUNDS = 2
 
 

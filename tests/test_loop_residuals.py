@@ -3,16 +3,17 @@
 import numpy as np
 import pytest
 
-from gaitsim.loop import residuals
+from gaitsim.loop import residuals, settings
+from gaitsim.loop.signature import signature
 from gaitsim.scenario import scenario_from_dict
-from gaitsim.truth import simulate_walk
+from gaitsim.simulate import simulate_walk
 
 
 def _walk(seed: int, sensor: dict | None = None, **sections):
     doc = {"path": {"kind": "straight", "length_m": 14.0}, "sampling": {"rate_hz": 200.0},
            "sensor": {"preset": "vn200", **(sensor or {})}, **sections}
     rec = simulate_walk(scenario_from_dict(doc), seed=seed)
-    return rec, residuals.signature(rec.t, rec.acc, rec.gyr, rec.truth.t, rec.truth.pos)
+    return rec, signature(rec.t, rec.acc, rec.gyr, rec.truth.t, rec.truth.pos)
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +33,7 @@ def test_two_seeds_of_one_walk_differ_at_the_noise_level(reference_pair):
     res = residuals.compare(a, b)
     z = np.array([r.z for r in res.values()])
     # stride variability and sensor noise only: at most one residual of ~18 may pass 3 sigma by chance
-    assert np.sum(z > residuals.NOISE_LEVEL) <= 1, {k: round(r.z, 1) for k, r in res.items()}
+    assert np.sum(z > settings.NOISE_LEVEL) <= 1, {k: round(r.z, 1) for k, r in res.items()}
 
 
 def test_stance_creep_reads_as_stance_velocity():
@@ -68,7 +69,7 @@ def test_too_short_a_recording_is_refused():
     rec, _ = _walk(1)
     n = int(3.0 * 200)
     with pytest.raises(ValueError, match="regular strides"):
-        residuals.signature(rec.t[:n], rec.acc[:n], rec.gyr[:n])
+        signature(rec.t[:n], rec.acc[:n], rec.gyr[:n])
 
 
 def test_clipping_shows_as_flat_tops_and_a_sharp_peak_does_not():

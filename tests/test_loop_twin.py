@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 import nav
-from gaitsim.loop import residuals, twin
+from gaitsim.loop import settings, twin
+from gaitsim.loop.signature import signature
+from gaitsim.measured.reference import as_measured
 from gaitsim.scenario import scenario_from_dict
-from gaitsim.truth import simulate_walk
+from gaitsim.simulate import simulate_walk
 
 
 @pytest.fixture(scope="module")
@@ -18,10 +20,10 @@ def fitted():
                       "mounting_misalignment": [[12.0, -8.0, 0.0], "deg"]},
            "gait": {"cadence_steps_per_min": 100.0, "stride_length_m": 1.25, "pitch_toe_off_deg": 55.0},
            }
-    rec = twin.as_measured(simulate_walk(scenario_from_dict(doc), seed=5), reference_rate_hz=100.0)
-    sig = residuals.signature(rec.t, rec.acc, rec.gyr, rec.reference.t, rec.reference.pos)
-    sol = nav.navigate(rec, twin.NAV_OPTIONS)
-    return rec, twin.fit_twin(rec, sig, sol)
+    rec = as_measured(simulate_walk(scenario_from_dict(doc), seed=5), reference_rate_hz=100.0)
+    sig = signature(rec.t, rec.acc, rec.gyr, rec.reference.t, rec.reference.pos)
+    sol = nav.navigate(rec, settings.NAV_OPTIONS)
+    return rec, twin.fit_twin(rec, sig, sol, twin.TwinSimulator())
 
 
 def test_measured_recording_carries_no_gait_or_sensor_parameters(fitted):
@@ -32,17 +34,17 @@ def test_measured_recording_carries_no_gait_or_sensor_parameters(fitted):
 
 def test_cadence_stride_length_and_mount_tilt_are_recovered(fitted):
     _, fit = fitted
-    gait = fit.doc["gait"]
+    gait = fit.document()["gait"]
     assert gait["cadence_steps_per_min"] == pytest.approx(100.0, rel=0.02)
     assert gait["stride_length_m"] == pytest.approx(1.25, rel=0.03)
-    roll, pitch, _ = fit.doc["sensor"]["mounting_misalignment"][0]
+    roll, pitch, _ = np.degrees(fit.scenario.sensor["mounting_misalignment"])
     assert roll == pytest.approx(12.0, abs=0.5) and pitch == pytest.approx(-8.0, abs=0.5)
 
 
 def test_the_turn_becomes_a_polyline_of_the_walked_length(fitted):
     _, fit = fitted
-    assert fit.doc["path"]["kind"] == "polyline"
-    pts = fit.doc["path"]["waypoints_m"]
+    assert fit.document()["path"]["kind"] == "polyline"
+    pts = fit.document()["path"]["waypoints_m"]
     length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:]))
     assert length == pytest.approx(16.0, rel=0.1)
 
@@ -55,7 +57,7 @@ def test_matched_statistics_agree(fitted):
     shape = fit.notes["gait_shape_fit"]
     assert shape["rms_rate_misfit_fit_dps"] < 10.0  # of a profile spanning +-500 deg/s
     np.testing.assert_allclose(shape["pitch_extremes_twin_deg"], shape["pitch_extremes_measured_deg"], atol=2.0)
-    assert fit.doc["gait"]["pitch_toe_off_deg"] == pytest.approx(55.0, abs=4.0)
+    assert fit.document()["gait"]["pitch_toe_off_deg"] == pytest.approx(55.0, abs=4.0)
 
 
 def test_sensor_position_on_the_foot_is_found(fitted):
@@ -66,7 +68,17 @@ def test_sensor_position_on_the_foot_is_found(fitted):
 
 def test_noise_is_matched_to_the_static_part(fitted):
     rec, fit = fitted
-    sim = twin.simulate(fit)
+    sim = twin.TwinSimulator()(fit)
     q0, q1 = 20, 200  # the first second is standing in both
     ratio = sim.gyr[q0:q1].std(0) / rec.gyr[q0:q1].std(0)
     assert ratio == pytest.approx([1, 1, 1], rel=0.25)
+
+
+def test_a_sensor_change_reuses_the_simulated_walk(fitted):
+    _, fit = fitted
+    simulate = twin.TwinSimulator()
+    base = simulate(fit)
+    biased = simulate(fit.with_changes({"sensor": {"accel_bias": [[0.1, -0.2, 0.05], "m/s^2"]}}))
+    assert biased.truth is base.truth  # the walk was simulated once
+    np.testing.assert_allclose(biased.acc - base.acc, np.tile([0.1, -0.2, 0.05], (len(base.t), 1)), atol=1e-9)
+    np.testing.assert_array_equal(biased.gyr, base.gyr)

@@ -1,7 +1,6 @@
 """gaitmap-healthy loader: units, frames, saturation, clock offset, lever arm and reference (real data)."""
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,10 +9,10 @@ from gaitsim.measured import gaitmap, gaitmap_foot_pose, gaitmap_stride_events, 
 from gaitsim.measured.quality import DataQualityWarning, still_mask
 from nav import quaternion as quat
 from nav.recording import RecordingError
+from conftest import DATA, needs_data
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 pytestmark = [
-    pytest.mark.skipif(not (DATA / "gaitmap-healthy").is_dir(), reason=f"shared measured data not found at {DATA}"),
+    needs_data("gaitmap-healthy"),
     pytest.mark.filterwarnings("ignore::gaitsim.measured.quality.DataQualityWarning"),
 ]
 

@@ -1,16 +1,15 @@
 """ucr-fgo loader: units, 60 Hz clock, zero-velocity labels and the z-down reference made right-handed z-up."""
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gaitsim.measured import load_dataset, ucr_zero_velocity_labels
 from gaitsim.measured.quality import DataQualityWarning
+from conftest import DATA, needs_data
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-pytestmark = pytest.mark.skipif(not (DATA / "ucr-fgo").is_dir(), reason=f"shared measured data not found at {DATA}")
+pytestmark = needs_data("ucr-fgo")
 
 
 @pytest.fixture(scope="module")

@@ -1,16 +1,15 @@
 """xio-ngimu loader: repeated rows dropped and counted, jitter kept and reported, units, loop-closure reference."""
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gaitsim.measured import load_dataset
 from gaitsim.measured.quality import DataQualityWarning
+from conftest import DATA, needs_data
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-pytestmark = pytest.mark.skipif(not (DATA / "xio-ngimu").is_dir(), reason=f"shared measured data not found at {DATA}")
+pytestmark = needs_data("xio-ngimu")
 
 
 @pytest.fixture(scope="module")

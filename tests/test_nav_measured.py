@@ -5,14 +5,12 @@ x-io's own tracker closes the loops to 82 mm and 421 mm; a plain ZUPT filter rea
 """
 
 import warnings
-from pathlib import Path
 
-import pytest
 
 from nav.pipeline import NavOptions, run
+from conftest import DATA, needs_data
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"measured data folder {DATA} is absent")
+pytestmark = needs_data()
 
 
 def _scores(name):

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from nav_synthetic import synthetic_walk
 
-from gaitsim.truth import simulate_walk
 from gaitsim.scenario import load_scenario
+from gaitsim.simulate import simulate_walk
 from nav import calibration, pipeline
 from nav.ekf import FilterConfig
 from nav.recording import Recording, Reference

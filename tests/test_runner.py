@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from gaitsim.errors import ScenarioError
-from gaitsim.runner import RunsFailedError, derive_seed, run_tasks
+from gaitsim.experiments.runner import RunsFailedError, derive_seed, run_tasks
 
 
 def random_walk_end(task: dict) -> dict:

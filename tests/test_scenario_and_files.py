@@ -7,8 +7,10 @@ import pytest
 
 from gaitsim.cli import main
 from gaitsim.errors import ScenarioError
-from gaitsim.generate import generate
-from gaitsim.scenario import load_scenario, scenario_from_dict
+from gaitsim.experiments.setup import targets_from_scenario
+from gaitsim.scenario import load_scenario, scenario_document, scenario_from_dict, with_changes
+from gaitsim.simulate import generate
+from gaitsim.world import path as paths
 from nav.recording import TRUTH_COLUMNS, read_recording
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +46,7 @@ BAD = {
     "low rate": ("[sampling]\nrate_hz = 10.0", "rate_hz = 10.0"),
     "slap too long": ("[impact]\nslap_duration_s = 0.5", "slap_duration_s = 0.5"),
     "negative seed": ("[scenario]\nseed = -1", "seed = -1"),
+    "toes down at heel strike": ("[gait]\npitch_heel_strike_deg = 5.0", "pitch_heel_strike_deg = 5.0"),
 }
 
 
@@ -122,7 +125,7 @@ def test_multi_run_output_and_refusal_to_clobber(tmp_path):
 
 
 def test_interrupted_generation_leaves_nothing(tmp_path, monkeypatch):
-    import gaitsim.generate as gen
+    import gaitsim.simulate as gen
 
     scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
 
@@ -133,3 +136,53 @@ def test_interrupted_generation_leaves_nothing(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         gen.generate(scen, tmp_path / "rec")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_degree_keys_are_held_in_si_and_written_back_in_degrees():
+    doc = {"path": {"kind": "straight", "length_m": 5.0}, "gait": {"pitch_toe_off_deg": 50.0, "swing_roll_deg": 4.0},
+           "impact": {"slap_rate_dps": 300.0}, "micromotion": {"stance_rotation_dps": [1.0, -2.0, 3.0]},
+           "mount": {"rpy_deg": [10.0, -5.0, 2.0]}, "sensor": {"preset": "vn200", "withhold": True}}
+    scen = scenario_from_dict(doc, "deg")
+    assert scen.walk.gait.pitch_toe_off == pytest.approx(np.radians(50.0), rel=1e-15)
+    assert scen.walk.impact.slap_rate == pytest.approx(np.radians(300.0), rel=1e-15)
+    np.testing.assert_allclose(scen.walk.micro.stance_rotation_rate, np.radians([1.0, -2.0, 3.0]), rtol=1e-15)
+    np.testing.assert_allclose(scen.mount.rpy, np.radians([10.0, -5.0, 2.0]), rtol=1e-15)
+    written = scenario_document(scen)
+    assert written["gait"]["pitch_toe_off_deg"] == 50.0 and written["impact"]["slap_rate_dps"] == 300.0
+    assert written["micromotion"]["stance_rotation_dps"] == [1.0, -2.0, 3.0]
+    again = scenario_from_dict(written, "written")
+    assert again.walk == scen.walk and again.mount == scen.mount and again.rate_hz == scen.rate_hz
+    for key in ("accel_noise_density", "gyro_bias_instability", "accel_misalignment"):
+        np.testing.assert_allclose(again.sensor[key], scen.sensor[key], rtol=1e-15, atol=0)
+    assert again.sensor.withheld
+
+
+def test_changes_are_converted_and_validated_like_a_file():
+    scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
+    changed = with_changes(scen, {"gait": {"pitch_toe_off_deg": 40.0}, "sensor": {"accel_range": [4.0, "g"]}})
+    assert changed.walk.gait.pitch_toe_off == pytest.approx(np.radians(40.0), rel=1e-15)
+    assert float(changed.sensor["accel_range"]) == pytest.approx(4 * 9.80665)
+    assert scen.walk.gait.pitch_toe_off == pytest.approx(np.radians(45.0), rel=1e-15)  # the original is unchanged
+    with pytest.raises(ScenarioError, match="pitch_toe_off_deg = -3.0"):
+        with_changes(scen, {"gait": {"pitch_toe_off_deg": -3.0}})
+    with pytest.raises(ScenarioError, match="length"):
+        with_changes(scen, {"gait": {"stride_length_m": 6.0}})  # longer than the 4.2 m path
+    with pytest.raises(ScenarioError, match="cannot be changed"):
+        with_changes(scen, {"path": {"length_m": 9.0}})
+
+
+def test_rounded_corners_fit_exactly_when_the_tangent_cut_fits_the_legs():
+    square = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]])  # a 90 deg corner cuts r tan(45 deg) = r per leg
+    assert paths.corners_fit(square, 2.0) and not paths.corners_fit(square, 2.01)
+    assert not paths.corners_fit(np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]]), 0.1)  # repeated waypoint
+    with pytest.raises(ValueError):
+        paths.polyline(square, 2.01)
+
+
+def test_paper_targets_are_read_from_the_scenario_and_all_required():
+    paper = load_scenario(ROOT / "scenarios/paper.toml")
+    assert targets_from_scenario(paper).along_track_error_before_m == 1.95
+    table = dict(paper.targets)
+    del table["heading_drift_dps"]
+    with pytest.raises(ScenarioError, match="heading_drift_dps"):
+        targets_from_scenario(scenario_from_dict({"path": dict(paper.path_table), "targets": table}, "t"))

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from gaitsim.tracker import TrackerSpec, track
+from gaitsim.experiments.tracker import TrackerSpec, track
 from nav.recording import Truth
 
 

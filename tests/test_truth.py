@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from gaitsim import smooth
-from gaitsim.foot import FootModel, Mount
-from gaitsim.gait import plan_stances
-from gaitsim.profile import FootTrajectory
+from gaitsim.world import smooth
+from gaitsim.world.foot import FootModel, Mount
+from gaitsim.world.gait import plan_stances
+from gaitsim.world.profile import FootTrajectory
 from gaitsim.scenario import load_scenario, scenario_from_dict
-from gaitsim.truth import run_generators, simulate_walk
+from gaitsim.simulate import run_generators, simulate_walk
 from nav import quaternion as Q
 from strapdown_reference import integrate_increments, rk4_windows
 
@@ -246,7 +246,7 @@ def test_impact_ringing_adds_a_damped_resonance_at_its_frequency():
 
 def test_mount_rotation_rotates_the_sensor_axes():
     rpy = (12.0, -8.0, 0.0)
-    foot = FootModel(Mount(rpy_deg=rpy))
+    foot = FootModel(Mount(rpy=tuple(np.deg2rad(rpy))))
     s = foot.sample(np.zeros((1, 6)), np.zeros((1, 6)), np.zeros((1, 6)))
     c = Q.to_matrix(Q.from_euler_zyx(0.0, np.deg2rad(rpy[1]), np.deg2rad(rpy[0])))
     np.testing.assert_allclose(s.acc[0], c.T @ [0, 0, G], atol=1e-12)

@@ -6,7 +6,7 @@ import numpy as np
 
 from gaitsim.imu.model import apply_sensor
 from gaitsim.scenario import load_scenario, scenario_from_dict
-from gaitsim.truth import run_generators, simulate_walk
+from gaitsim.simulate import run_generators, simulate_walk
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -13,9 +13,10 @@ import numpy as np
 
 from nav import detectors
 from nav.recording import Recording
+from nav.series import resample
 from nav.zupt_velocity import to_heading_frame
 
-from ..tracker import TrackerSpec, track
+from .tracker import TrackerSpec, track
 
 PHASES = 400
 
@@ -44,7 +45,7 @@ def cycle_averages(rec: Recording, cycles: int, sigma_a: float, sigma_g: float, 
     yaw_q = tr.quat  # the walking frame follows the foot's heading
     v_true = to_heading_frame(tr.vel, yaw_q)
     v_tracked = to_heading_frame(
-        np.column_stack([np.interp(rec.t, tracked.t, tracked.vel[:, i]) for i in range(3)]), yaw_q)
+        resample(rec.t, tracked.t, tracked.vel), yaw_q)
     stat = detectors.statistic("shoe", rec.acc, rec.gyr, sigma_a, sigma_g, window)
     stat = np.concatenate([stat, np.full(len(rec.t) - len(stat), stat[-1])])
     detected = {thr: detectors.detect("shoe", rec.t, rec.acc, rec.gyr, thr, sigma_a, sigma_g, window).stationary

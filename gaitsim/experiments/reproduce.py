@@ -1,7 +1,8 @@
 """``gaitsim reproduce``: the seed paper end to end, then beyond it, deterministic from scenarios/paper.toml.
 
 Steps: the simulated calibration lab (own seed) -> stance pseudo-velocity from tracked calibration walks (own
-seeds) -> Monte Carlo tasks through :func:`gaitsim.runner.run_tasks` (resumable, parallel, optionally Dask) ->
+seeds) -> Monte Carlo tasks through :func:`gaitsim.experiments.runner.run_tasks` (resumable, parallel, optionally
+Dask) ->
 gait-cycle analysis of run 0 -> tables, figures and results/README.md (:mod:`gaitsim.experiments.report`).
 """
 
@@ -16,14 +17,15 @@ import numpy as np
 from nav.metrics import summarise_runs
 from nav.files import write_json
 
-from ..runner import run_tasks
+from .runner import run_tasks
 from ..scenario import load_scenario, scenario_from_dict
-from ..tracker import TrackerSpec
-from ..truth import simulate_walk
+from .tracker import TrackerSpec
+from ..simulate import simulate_walk
 from . import report
 from .cycle import cycle_averages, detected_stance_s, predicted_length_loss
 from .paper import build_tasks, quick_overrides
-from .setup import calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario
+from .setup import (calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario,
+                    targets_from_scenario)
 from .tasks import walk_task
 
 PAPER = Path(__file__).resolve().parents[2] / "scenarios" / "paper.toml"
@@ -48,6 +50,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
     clock = time.perf_counter()
     scenario = load_scenario(scenario_path)
     nav, exp = settings_from_scenario(scenario)
+    targets = targets_from_scenario(scenario)
     doc = scenario_doc(scenario)
     runs = scenario.runs
     if quick:
@@ -68,7 +71,8 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
     rec0 = simulate_walk(scenario_from_dict(doc, "cycle analysis"), seed=scenario.seed, run=0)
     tracker = TrackerSpec(exp.tracker_rate_hz, exp.tracker_resolution_m, exp.tracker_noise_m)
     thresholds = sorted(set(exp.fig4_thresholds) | set(exp.threshold_sweep))
-    avg = cycle_averages(rec0, exp.cycle_count, nav.sigma_a_mps2, np.deg2rad(nav.sigma_g_dps), nav.window,
+    detector = nav.options()  # the [nav] detector settings in SI (converted once there)
+    avg = cycle_averages(rec0, exp.cycle_count, detector.sigma_a, detector.sigma_g, detector.window,
                          thresholds, tracker, np.random.default_rng([scenario.seed, 7]))
     stance_s = detected_stance_s(avg)
     strides = results[0]["walk"]["strides"]
@@ -90,7 +94,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
         "walk": results[0]["walk"],
     }
     summary["timings_s"] = timings
-    report.write(out, summary, main, avg, results, tasks, doc)
+    report.write(out, summary, main, avg, results, tasks, doc, targets)
     write_json(out / "summary.json", summary)
     return summary
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,13 +19,14 @@ from nav import detectors
 from nav.ekf import FilterConfig
 from nav.pipeline import NavOptions, prepare
 from nav.recording import Recording
+from nav.series import resample
 from nav.zupt_velocity import StanceVelocityProfile, save_stance_velocity, stance_velocities
 
 from ..errors import ScenarioError
 from ..imu.calibration_lab import run_lab
 from ..scenario import Scenario, fill, scenario_from_dict
-from ..tracker import TrackerSpec, track
-from ..truth import simulate_walk
+from .tracker import TrackerSpec, track
+from ..simulate import simulate_walk
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,37 @@ class ExperimentSettings:
     sensitivity_presets: tuple[str, ...] = ("bmi160", "vn200", "adis16497")
     sensitivity_detectors: tuple[str, ...] = ("shoe", "are", "mv", "mag")
     workers: int = 2
+
+
+@dataclass(frozen=True)
+class PaperTargets:
+    """The [targets] table: the seed paper's numbers the reproduction is measured against (every key required;
+    see scenarios/paper.toml for each one's source). Units in the names; deg/s for the heading drift."""
+
+    perpendicular_error_before_m: float = math.nan
+    along_track_error_before_m: float = math.nan
+    final_error_before_m: float = math.nan
+    final_error_after_max_m: float = math.nan
+    reduction_min: float = math.nan
+    heading_drift_dps: float = math.nan
+    detected_stance_at_1e4_s: float = math.nan
+    detected_stance_at_3e4_s: float = math.nan
+    fig5_gap_max: float = math.nan
+    relative_tolerance: float = math.nan
+
+    def within(self, value: float, target: float) -> str:
+        """"yes" when ``value`` lies within ``relative_tolerance`` x |target| of ``target``, else "no"."""
+        return "yes" if abs(value - target) <= self.relative_tolerance * abs(target) else "no"
+
+
+def targets_from_scenario(scenario: Scenario) -> PaperTargets:
+    """Validate the [targets] table: every key of :class:`PaperTargets`, a number each."""
+    where = f"{scenario.source} [targets]"
+    targets = fill(PaperTargets, scenario.targets, where)
+    missing = [f.name for f in dataclasses.fields(PaperTargets) if math.isnan(getattr(targets, f.name))]
+    if missing:
+        raise ScenarioError(f"{where}: missing key(s) {missing}; every one of them is required")
+    return targets
 
 
 def _tuple_fields(cls) -> dict:
@@ -140,7 +173,7 @@ def fit_stance_velocity(doc: dict, nav: NavSettings, exp: ExperimentSettings, ca
     for k in range(exp.calibration_walks):
         rec: Recording = simulate_walk(scenario, seed=exp.calibration_walk_seed, run=k)
         tracked = track(rec.truth, spec, np.random.default_rng([exp.calibration_walk_seed, k]))
-        vel = np.column_stack([np.interp(rec.t, tracked.t, tracked.vel[:, i]) for i in range(3)])
+        vel = resample(rec.t, tracked.t, tracked.vel)
         stationary = prepare(rec, options).stationary
         stances += stance_velocities(vel, rec.truth.quat, stationary)
     meta = {"threshold": threshold, "walks": exp.calibration_walks, "seed": exp.calibration_walk_seed,

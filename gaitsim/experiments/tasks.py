@@ -12,9 +12,8 @@ from nav.pipeline import run
 from nav.recording import Recording
 
 from ..imu.config import sensor_from_table
-from ..imu.model import apply_sensor
 from ..scenario import scenario_from_dict
-from ..truth import describe, run_generators, simulate_truth
+from ..simulate import sense, simulate_world
 from .setup import NavSettings
 
 TRACK_POINTS = 200  # decimated track kept for figures
@@ -44,18 +43,11 @@ def walk_task(task: dict) -> dict:
     """
     scenario = scenario_from_dict(task["scenario"], task["key"])
     nav = NavSettings(**task["nav"])
-    gait_rng, _ = run_generators(task["seed"], task["run"])
-    truth, events, _ = simulate_truth(scenario, gait_rng)
-    meta = describe(scenario, task["seed"], task["run"])
+    truth, events, meta = simulate_world(scenario, task["seed"], task["run"])
     recordings: dict[str, Recording] = {}
-    for name, table in task["sensors"].items():
-        if table is None:
-            t, acc, gyr = truth.t, truth.acc, truth.gyr
-        else:
-            _, sensor_rng = run_generators(task["seed"], task["run"])  # common random numbers across variants
-            t, acc, gyr = apply_sensor(sensor_from_table(table, f"{task['key']} sensor {name}"), truth.t, truth.acc,
-                                       truth.gyr, sensor_rng)
-        recordings[name] = Recording(t=t, acc=acc, gyr=gyr, meta=meta, truth=truth, events=events)
+    for name, table in task["sensors"].items():  # common random numbers across sensor variants
+        sensor = None if table is None else sensor_from_table(table, f"{task['key']} sensor {name}")
+        recordings[name] = sense(truth, events, meta, sensor, task["seed"], task["run"])
     out = {}
     keep = set(task.get("keep_tracks", ()))
     for variant in task["variants"]:

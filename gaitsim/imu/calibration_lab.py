@@ -52,8 +52,9 @@ import numpy as np
 from gaitsim.imu.allan import allan_deviation
 from gaitsim.imu.model import SensorSpec, apply_sensor
 from nav.calibration import Calibration, save_calibration
+from nav.constants import DEFAULT_GRAVITY
 
-LAB_GRAVITY = 9.81  # m/s^2, the lab's known local gravity (same as the simulator's world)
+LAB_GRAVITY = DEFAULT_GRAVITY  # m/s^2, the lab's known local gravity (the simulator's world's)
 
 
 def table_orientations() -> np.ndarray:

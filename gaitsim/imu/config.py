@@ -45,10 +45,12 @@ Unicode datasheet spellings (``°/√h``, ``µg/√Hz``) are accepted as well.
 
 from __future__ import annotations
 
+import numpy as np
+
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.model import PARAMETERS, SensorSpec
 from gaitsim.imu.presets import PRESET_NAMES, get_preset
-from gaitsim.imu.units import accepted_units, to_si
+from gaitsim.imu.units import accepted_units, si_unit, to_si
 
 PLAIN_KEYS = ("preset", "withhold", "filter_order")
 ACCEPTED_KEYS = PLAIN_KEYS + tuple(PARAMETERS)
@@ -100,3 +102,27 @@ def sensor_from_table(table: dict, where: str = "[sensor]") -> SensorSpec:
         )
     except ScenarioError as exc:
         raise ScenarioError(f"{where} {exc}") from None
+
+
+def changed_sensor(spec: SensorSpec | None, table: dict, where: str = "[sensor]") -> SensorSpec:
+    """``spec`` (None: the ideal sensor) with the quantities of a ``[sensor]``-style table (``[value, "unit"]``
+    entries, converted to SI) replaced; the other keys of a [sensor] table cannot change an existing sensor."""
+    spec = get_preset("ideal") if spec is None else spec
+    refused = [key for key in table if key not in PARAMETERS]
+    if refused:
+        raise ScenarioError(f"{where}: key(s) {refused} cannot change a sensor; accepted keys: {list(PARAMETERS)}")
+    try:
+        return spec.replace(**{key: _parse_quantity(key, raw, where) for key, raw in table.items()})
+    except ScenarioError as exc:
+        raise ScenarioError(f"{where} {exc}") from None
+
+
+def sensor_table(spec: SensorSpec) -> dict:
+    """A ``[sensor]`` table that rebuilds ``spec``: the ideal preset, its filter order, whether it is withheld, and
+    every parameter that differs from the ideal sensor's, in SI with the unit's name."""
+    ideal = get_preset("ideal")
+    table = {"preset": "ideal", "filter_order": spec.filter_order, "withhold": spec.withheld}
+    for key, (kind, _shape, _default) in PARAMETERS.items():
+        if not np.array_equal(spec[key], ideal[key]):
+            table[key] = [spec[key].tolist(), si_unit(kind)]
+    return table

@@ -18,9 +18,10 @@ import re
 
 import numpy as np
 
+from nav.constants import STANDARD_GRAVITY
+
 from gaitsim.errors import ScenarioError
 
-STANDARD_GRAVITY = 9.80665  # m/s^2, the "g" of datasheet units
 _DEG = math.pi / 180.0
 _HOUR = 3600.0
 _SQRT_HOUR = 60.0  # sqrt(3600 s)

@@ -1,2 +1,5 @@
-"""The sim-to-real loop: residuals between a recording and its simulated twin, a library of effects the
-twin may lack, their attribution, and the before/after report (``gaitsim loop DATASET --out DIR``)."""
+"""The sim-to-real loop (``gaitsim loop DATASET --out DIR``): a recording's strides (strides), its stride-normalised
+signature (signature), the digital twin fitted to it (twin, with its gait shape in gait_fit and sensor position
+in mount_fit), the residuals between the two (residuals), a library of effects the twin may lack (effects), their
+attribution (attribution), blind tests (blind), the report (report) and the command (command); every tuning
+constant is in settings."""

@@ -2,7 +2,7 @@
 
 Each case simulates a short straight walk with the vn200 noise preset plus one or two effects, withholds the
 sensor parameters (``withhold = true``) and strips the recording to what a measured one carries
-(:func:`gaitsim.loop.twin.as_measured`: IMU samples, the sampling rate, and the true positions as a 100 Hz
+(:func:`gaitsim.measured.reference.as_measured`: IMU samples, the sampling rate, and the true positions as a 100 Hz
 position reference, like a motion tracker). The loop then fits its own twin without the effect.
 
 ``gyro_scale`` is outside the library on purpose (a 5 % gyro scale factor): the loop must report it as
@@ -17,16 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from nav.constants import STANDARD_GRAVITY
 from nav.recording import Recording
 
+from ..measured.reference import as_measured
 from ..scenario import scenario_from_dict
-from ..truth import simulate_walk
-from . import attribution, twin
-
-WALK_LENGTH_M = 20.0
-RATE_HZ = 200.0
-REFERENCE_RATE_HZ = 100.0
-SEED = 11
+from ..simulate import simulate_walk
+from . import attribution, settings
 
 
 @dataclass(frozen=True)
@@ -58,7 +55,7 @@ CASES = (
     BlindCase("accel_gyro_skew", (("accel_gyro_skew", 5.0, "ms"),), sensor={"accel_gyro_skew": [5.0, "ms"]}),
     BlindCase("mount_yaw", (("mount_yaw", 8.0, "deg"),), sensor={"mounting_misalignment": [[0.0, 0.0, 8.0], "deg"]}),
     BlindCase("accel_scale", (("accel_scale", 2.0, "%"),), sensor={"accel_misalignment": [_diag(1.02), "1"]}),
-    BlindCase("saturation", (("saturation", 5 * 9.80665, "m/s^2"),), sensor={"accel_range": [5.0, "g"]}),
+    BlindCase("saturation", (("saturation", 5 * STANDARD_GRAVITY, "m/s^2"),), sensor={"accel_range": [5.0, "g"]}),
     BlindCase("outside_gyro_scale", (("outside", 5.0, "%"),), sensor={"gyro_misalignment": [_diag(1.05), "1"]}),
     BlindCase("no_effect", (("none", 0.0, "-"),), rounds=3),
     BlindCase("roll_and_scale", (("stance_roll", 12.0, "deg/s"), ("accel_scale", 2.0, "%")),
@@ -68,12 +65,13 @@ CASES = (
 BY_NAME = {c.name: c for c in CASES}
 
 
-def blind_recording(case: BlindCase, seed: int = SEED) -> Recording:
+def blind_recording(case: BlindCase, seed: int = settings.BLIND_SEED) -> Recording:
     """The synthetic "measured" recording of ``case`` (module docstring)."""
-    doc = {"path": {"kind": "straight", "length_m": WALK_LENGTH_M}, "sampling": {"rate_hz": RATE_HZ},
+    doc = {"path": {"kind": "straight", "length_m": settings.BLIND_WALK_LENGTH_M},
+           "sampling": {"rate_hz": settings.BLIND_RATE_HZ},
            "sensor": {"preset": "vn200", "withhold": True, **case.sensor}, **case.sections}
     rec = simulate_walk(scenario_from_dict(doc, f"<blind {case.name}>"), seed=seed)
-    return twin.as_measured(rec, REFERENCE_RATE_HZ)
+    return as_measured(rec, settings.BLIND_REFERENCE_RATE_HZ)
 
 
 def run_case(case: BlindCase) -> attribution.LoopResult:

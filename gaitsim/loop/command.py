@@ -10,16 +10,16 @@ if anything fails.
 
 from __future__ import annotations
 
-import json
-import math
 import time
 import warnings
 from pathlib import Path
 
-from nav.files import atomic_output_dir, jsonable
+from nav.files import atomic_output_dir, write_json
 from nav.recording import RecordingError, list_runs, read_recording
 
-from . import attribution, blind, report
+from ..measured import load_dataset
+from ..numbers import shown
+from . import attribution, blind, report, settings
 
 DATASETS = ("gaitmap-healthy", "ucr-fgo", "xio-ngimu")
 CHOICES = DATASETS + ("blind", "all")
@@ -31,8 +31,8 @@ def add_parser(subparsers) -> None:
                               description=__doc__)
     p.add_argument("dataset", help=f"one of {', '.join(CHOICES)}, or a recording folder")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--rounds", type=int, default=attribution.MAX_ROUNDS,
-                   help=f"largest number of residuals acted on per recording (default {attribution.MAX_ROUNDS})")
+    p.add_argument("--rounds", type=int, default=settings.MAX_ROUNDS,
+                   help=f"largest number of residuals acted on per recording (default {settings.MAX_ROUNDS})")
     p.add_argument("--data", default=None, help="folder holding the shared datasets (default: $GAITSIM_DATA or "
                                                 "../shared/data)")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
@@ -41,8 +41,6 @@ def add_parser(subparsers) -> None:
 
 def _recordings(dataset: str, data_root) -> list[tuple[str, object]]:
     if dataset in DATASETS:
-        from ..measured import load_dataset
-
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the loaders' data-quality warnings are in each recording's meta
             recs = load_dataset(dataset, data_root)
@@ -60,9 +58,8 @@ def _summary_line(label: str, doc: dict) -> str:
                         for a in doc["attributions"]) or "no residual above the noise level"
     nav = doc["navigation"].get("nav_length_ratio") or doc["navigation"].get("nav_final_error") or {}
     name = "length ratio" if "nav_length_ratio" in doc["navigation"] else "final error (m)"
-    fmt = lambda x: "-" if x is None or not math.isfinite(x) else f"{x:.4g}"  # noqa: E731
-    return (f"| {label} | {effects} | {name}: {fmt(nav.get('measured'))} | "
-            f"{fmt(nav.get('discrepancy_before'))} -> {fmt(nav.get('discrepancy_after'))} |")
+    return (f"| {label} | {effects} | {name}: {shown(nav.get('measured'))} | "
+            f"{shown(nav.get('discrepancy_before'))} -> {shown(nav.get('discrepancy_after'))} |")
 
 
 def _run_recordings(dataset: str, folder: Path, rounds: int, data_root) -> list[str]:
@@ -90,17 +87,16 @@ def _run_blind(folder: Path) -> list[str]:
         result = blind.run_case(case)
         rows += blind.table_rows(case, result)
         print(f"blind {case.name}: {[a['effect'] for a in result.attributions]}")
-    (folder / "blind.json").write_text(json.dumps(jsonable(rows), indent=1))
-    fmt = report._fmt
+    write_json(folder / "blind.json", rows)
     lines = ["# Blind tests", "", blind.__doc__.strip(), "",
              "| case | true effect | true magnitude | found | fitted | residual | before | after (uncertainty) | "
              "nav final-error discrepancy before -> after (m) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['case']} | {r['true_effect']} | {fmt(r['true_magnitude'])} {r['unit']} | "
-                     f"{r['found_effect']} | {fmt(r['fitted_magnitude'])} | {r['residual']} | "
-                     f"{fmt(r['residual_before'])} | {fmt(r['residual_after'])} ({fmt(r['uncertainty_after'])}) | "
-                     f"{fmt(r['nav_final_error_discrepancy_before_m'])} -> "
-                     f"{fmt(r['nav_final_error_discrepancy_after_m'])} |")
+        lines.append(f"| {r['case']} | {r['true_effect']} | {shown(r['true_magnitude'])} {r['unit']} | "
+                     f"{r['found_effect']} | {shown(r['fitted_magnitude'])} | {r['residual']} | "
+                     f"{shown(r['residual_before'])} | {shown(r['residual_after'])} ({shown(r['uncertainty_after'])}) | "
+                     f"{shown(r['nav_final_error_discrepancy_before_m'])} -> "
+                     f"{shown(r['nav_final_error_discrepancy_after_m'])} |")
     (folder / "blind.md").write_text("\n".join(lines) + "\n")
     return [f"| [blind tests](blind.md) | {len(blind.CASES)} cases | | |"]
 

@@ -34,18 +34,13 @@ import numpy as np
 from nav import quaternion as quat
 from nav.recording import Recording
 
-from ..foot import FootModel, Mount
-from ..gait import MicroMotionParams
-from ..scenario import fill
-
-from . import residuals
+from ..scenario import Scenario, section_table
+from ..world.foot import FootModel
+from . import settings
+from .signature import Signature
 
 ACC_PROFILES = ("profile_acc_x", "profile_acc_y", "profile_acc_z")
 GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
-RINGING_BAND_HZ = 20.0  # lowest ringing frequency searched in the residual spectrum
-RINGING_SMOOTHING_HZ = 10.0  # width of the moving average applied to both spectra before their log ratio
-CLIP_BAND = 0.01  # a clipped sample lies within this share of the recording's largest accelerometer reading
-MIN_CLIPPED_RUNS = 2  # runs of >= 2 consecutive such samples needed before saturation is tried
 
 
 @dataclass(frozen=True)
@@ -77,11 +72,12 @@ class Effect:
     refine: bool = False
 
     def search_bounds(self, context: dict) -> tuple[float, float]:
-        """Bounds for this recording: a bandwidth stays below 0.45 times the sample rate; a clipping level
+        """Bounds for this recording: a bandwidth stays below ``settings.BAND_TOP_SHARE`` times the sample rate; a
+        clipping level
         cannot lie below the largest accelerometer reading the recording holds (searched up to 1.5 times it)."""
         low, high = self.bounds
         if self.name == "bandwidth":
-            high = min(high, 0.45 * context["rate_hz"])
+            high = min(high, settings.BAND_TOP_SHARE * context["rate_hz"])
         if self.name == "saturation":
             low = max(low, 0.98 * context["largest_acc_component"])
             high = min(high, 1.5 * context["largest_acc_component"])
@@ -164,7 +160,8 @@ LIBRARY: tuple[Effect, ...] = (
            lambda res, ctx: None if _value(res, "acc_gyro_lag") is None else -_value(res, "acc_gyro_lag")),
     Effect("mount_yaw", "yaw of the sensor axes on the foot (misalignment left after the gravity-based tilt)",
            "[sensor] mounting_misalignment (yaw)", "deg", ("swing_axis_yaw", "profile_gyr_x", "profile_acc_y"),
-           (-30.0, 30.0), lambda m, ctx: _sensor(mounting_misalignment=[[*ctx["mount_roll_pitch_deg"], m], "deg"]),
+           (-30.0, 30.0),
+           lambda m, ctx: _sensor(mounting_misalignment=[[*ctx["mount_roll_pitch_rad"], math.radians(m)], "rad"]),
            lambda res, ctx: _value(res, "swing_axis_yaw")),
     Effect("accel_scale", "accelerometer scale factor error, equal on the three axes",
            "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES, (-5.0, 5.0),
@@ -182,19 +179,19 @@ LIBRARY: tuple[Effect, ...] = (
 BY_NAME = {e.name: e for e in LIBRARY}
 
 
-def ringing_frequency(measured: residuals.Signature, twin: residuals.Signature) -> float:
+def ringing_frequency(measured: Signature, twin: Signature) -> float:
     """Frequency (Hz) where the measured |a| spectrum most exceeds the twin's, as the log ratio of the two
-    spectra smoothed over ``RINGING_SMOOTHING_HZ`` (a damped resonance is a broad bump; a single stride's
-    spectrum is a comb of stride harmonics), between RINGING_BAND_HZ and 0.45 times the sample rate; NaN when
-    the band is empty."""
+    spectra smoothed over ``settings.RINGING_SMOOTHING_HZ`` (a damped resonance is a broad bump; a single
+    stride's spectrum is a comb of stride harmonics), between ``settings.RINGING_BAND_HZ`` and
+    ``settings.BAND_TOP_SHARE`` times the sample rate; NaN when the band is empty."""
     f_m, p_m = measured.spectrum
     f_t, p_t = twin.spectrum
     p_t = np.interp(f_m, f_t, p_t)
-    width = max(1, int(round(RINGING_SMOOTHING_HZ / (f_m[1] - f_m[0]))))
+    width = max(1, int(round(settings.RINGING_SMOOTHING_HZ / (f_m[1] - f_m[0]))))
     kernel = np.ones(width) / width
     tiny = 1e-12 * max(p_m.max(), p_t.max(), 1e-300)
     excess = np.log(np.convolve(p_m, kernel, "same") + tiny) - np.log(np.convolve(p_t, kernel, "same") + tiny)
-    band = (f_m >= RINGING_BAND_HZ) & (f_m <= 0.45 * measured.rate_hz)
+    band = (f_m >= settings.RINGING_BAND_HZ) & (f_m <= settings.BAND_TOP_SHARE * measured.rate_hz)
     if not band.any():
         return math.nan
     return float(f_m[band][np.argmax(excess[band])])
@@ -202,39 +199,40 @@ def ringing_frequency(measured: residuals.Signature, twin: residuals.Signature) 
 
 def clipped_runs(acc: np.ndarray) -> int:
     """Number of flat tops in an accelerometer record (N, 3): runs of at least two consecutive samples of one
-    axis within ``CLIP_BAND`` of the largest reading of any axis. A sensor that clips holds its limit while the
+    axis within ``settings.CLIP_BAND`` of the largest reading of any axis. A sensor that clips holds its limit while the
     true force is beyond it; an unclipped impact peak is a single sample (gaitmap's readings that touch +-16 g
     are isolated samples: no flat top)."""
-    top = np.abs(acc) >= (1.0 - CLIP_BAND) * np.max(np.abs(acc))
+    top = np.abs(acc) >= (1.0 - settings.CLIP_BAND) * np.max(np.abs(acc))
     edges = np.diff(np.vstack([np.zeros((1, 3), int), top.astype(int), np.zeros((1, 3), int)]), axis=0)
     lengths = [np.flatnonzero(edges[:, i] == -1) - np.flatnonzero(edges[:, i] == 1) for i in range(3)]
     return int(sum(np.sum(n >= 2) for n in lengths))
 
 
-def context(rec: Recording, twin_doc: dict, measured: residuals.Signature, twin_sig: residuals.Signature) -> dict:
+def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signature) -> dict:
     """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
     the twin's current creep, stance rotation, roll rate, IMU site (m, foot frame) and sensor roll/pitch on
-    the foot (deg), and the stance rotation (deg/s, foot frame) that closes the core-stance rate residual (the
-    twin's, plus the residual turned from the sensor into the foot frame by the twin's mounting misalignment)."""
-    micro = fill(MicroMotionParams, twin_doc.get("micromotion", {}), "<twin> [micromotion]")
-    site = FootModel(fill(Mount, twin_doc.get("mount", {}), "<twin> [mount]")).lever_arm
-    mounting = twin_doc.get("sensor", {}).get("mounting_misalignment", [[0.0, 0.0, 0.0], "deg"])[0]
-    roll, pitch, yaw = np.radians(np.asarray(mounting, float))
+    the foot (rad), and the stance rotation (deg/s, foot frame) that closes the core-stance rate residual (the
+    twin's, plus the residual turned from the sensor into the foot frame by the twin's mounting misalignment).
+    Values are in the units of the scenario keys the effects set, the mount's roll and pitch in rad (the yaw
+    effect writes them back unchanged)."""
+    micro = section_table(twin.walk.micro, digits=None)
+    site = FootModel(twin.mount).lever_arm
+    roll, pitch, yaw = twin.sensor["mounting_misalignment"] if twin.sensor is not None else np.zeros(3)
     sensor_to_foot = quat.to_matrix(quat.from_euler_zyx(yaw, pitch, roll))
     rate_gap = np.array([measured.scalars[f"stance_rate_{a}"].value - twin_sig.scalars[f"stance_rate_{a}"].value
                          for a in "xyz"])
-    rotation = np.asarray(micro.stance_rotation_dps, float) + sensor_to_foot @ rate_gap
+    rotation = np.asarray(micro["stance_rotation_dps"], float) + sensor_to_foot @ rate_gap
     return {"rate_hz": measured.rate_hz,
-            "stance_rotation_dps": list(micro.stance_rotation_dps),
+            "stance_rotation_dps": list(micro["stance_rotation_dps"]),
             "stance_rotation_target_dps": rotation.tolist(),
             "imu_site_m": site.tolist(),
             "ringing_hz": round(ringing_frequency(measured, twin_sig), 1),
             "largest_acc_component": float(np.max(np.abs(rec.acc))),
             "clipped_runs": clipped_runs(rec.acc),
-            "creep_velocity_mps": list(micro.creep_velocity_mps),
-            "creep_mps": float(micro.creep_velocity_mps[0]),
-            "stance_roll_rate_dps": float(micro.stance_roll_rate_dps),
-            "mount_roll_pitch_deg": [float(mounting[0]), float(mounting[1])]}
+            "creep_velocity_mps": list(micro["creep_velocity_mps"]),
+            "creep_mps": float(micro["creep_velocity_mps"][0]),
+            "stance_roll_rate_dps": float(micro["stance_roll_rate_dps"]),
+            "mount_roll_pitch_rad": [float(roll), float(pitch)]}
 
 
 def applicable(effect: Effect, ctx: dict) -> bool:
@@ -242,8 +240,8 @@ def applicable(effect: Effect, ctx: dict) -> bool:
     without flat tops at the largest reading (:func:`clipped_runs`; lower impact peaks alone are as well the
     gait's)."""
     if effect.name == "impact_ringing":
-        return math.isfinite(ctx["ringing_hz"]) and ctx["ringing_hz"] >= 5
-    if effect.name == "saturation" and ctx["clipped_runs"] < MIN_CLIPPED_RUNS:
+        return math.isfinite(ctx["ringing_hz"]) and ctx["ringing_hz"] >= settings.MIN_RINGING_HZ
+    if effect.name == "saturation" and ctx["clipped_runs"] < settings.MIN_CLIPPED_RUNS:
         return False
     low, high = effect.search_bounds(ctx)
     return high > low

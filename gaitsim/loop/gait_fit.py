@@ -1,9 +1,9 @@
 """The twin's gait shape: events, pitch angles and rates fitted to a recording's stride-normalised pitch rate.
 
-The foot's dominant motion is its pitch. Per stride (gyro onset to gyro onset, :mod:`gaitsim.loop.residuals`),
+The foot's dominant motion is its pitch. Per stride (gyro onset to gyro onset, :mod:`gaitsim.loop.strides`),
 the angular rate about the stride's dominant axis is averaged on a phase grid (:func:`stride_profile`) and its
 integral gives the pitch. The simulator's pitch of a steady stride comes from
-:func:`gaitsim.profile.pitch_profile` alone (no MuJoCo; a few ms), so it can be fitted:
+:func:`gaitsim.world.profile.pitch_profile` alone (no MuJoCo; a few ms), so it can be fitted:
 
 1. **Events from features** (:func:`initial_guess`): heel strike at the impact peak of |a| late in the stride;
    the forefoot slap from the largest rocker rate after it to the quiet stance; heel off where the rate leaves
@@ -11,8 +11,9 @@ integral gives the pitch. The simulator's pitch of a steady stride comes from
    and rate at each event are read off the measured profile.
 2. **Least squares** (:func:`fit_pitch_profile`) from the better of that estimate and the given gait (the
    simulator's defaults at the recording's cadence), on the rate profile plus the stride's largest and
-   smallest pitch (one degree weighs ``ANGLE_WEIGHT`` deg/s). Combinations the scenario validation refuses
-   cost a large penalty.
+   smallest pitch (one degree weighs ``settings.ANGLE_WEIGHT`` deg/s). Combinations the scenario validation refuses
+   cost a large penalty. The fitted values are scenario keys in their units (deg, deg/s, deg/s^2, s): the fit
+   returns what a scenario file would say, and :func:`gaitsim.scenario.fill` converts it.
 """
 
 from __future__ import annotations
@@ -23,31 +24,20 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .. import path as paths
 from ..errors import ScenarioError
-from ..gait import GaitParams, ImpactParams, MicroMotionParams, Walk, plan_stances
-from ..profile import pitch_profile
-from ..scenario import validate_gait
-from . import residuals
-
-POINTS = 128  # phase grid of the profiles
-ANGLE_WEIGHT = 10.0  # deg/s of rate misfit per degree of pitch-extreme misfit
-MAX_EVALUATIONS = 600
-MIN_SWING_FRAC = 0.25
-STANCE_FLOOR = 0.1  # heel off: where the rate first exceeds this share of the push-off peak
-# (name, section, low, high): what the fit varies; swing_frac = 1 - the three stance fractions
-FITTED = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", "gait", 0.05, 0.5),
-          ("push_off_frac", "gait", 0.05, 0.35), ("pitch_heel_strike_deg", "gait", -45.0, -2.0),
-          ("pitch_rate_heel_strike_dps", "gait", -300.0, 700.0), ("pitch_toe_off_deg", "gait", 5.0, 85.0),
-          ("pitch_rate_toe_off_dps", "gait", -300.0, 900.0), ("pitch_accel_toe_off_dps2", "gait", -4e4, 1e4),
-          ("pitch_accel_heel_strike_dps2", "gait", -2e4, 2e4), ("slap_rate_dps", "impact", 0.0, 900.0),
-          ("slap_duration_s", "impact", 0.005, 0.15))
-GAIT_FIELDS = {f.name for f in dataclasses.fields(GaitParams)}
+from ..scenario import fill, section_table, validate_gait
+from ..world import path as paths
+from ..world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk, plan_stances
+from ..world.profile import pitch_profile
+from . import settings
+from .signature import Signature
+from .strides import dominant_axis, phase_resample
 
 
 @dataclass
 class StrideProfile:
-    """Stride-normalised pitch of a recording (or of the model) on ``POINTS`` phases from the gyro onset.
+    """Stride-normalised pitch of a recording (or of the model) on ``settings.PROFILE_POINTS`` phases from the gyro
+    onset.
 
     Attributes
     ----------
@@ -75,49 +65,49 @@ def _angle(rate: np.ndarray, period_s: float) -> np.ndarray:
     return angle - closing * np.arange(len(rate)) / len(rate)
 
 
-def stride_profile(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, sig: residuals.Signature) -> StrideProfile:
+def stride_profile(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, sig: Signature) -> StrideProfile:
     """Mean over the signature's strides of the rate about each stride's dominant axis and of |a|."""
-    gyr_phases = residuals.phase_resample(t, np.degrees(gyr), sig.strides, POINTS)  # (S, P, 3)
-    axes = np.array([residuals.dominant_axis(gyr[s0:s1]) for s0, s1 in sig.strides])
+    gyr_phases = phase_resample(t, np.degrees(gyr), sig.strides, settings.PROFILE_POINTS)  # (S, P, 3)
+    axes = np.array([dominant_axis(gyr[s0:s1]) for s0, s1 in sig.strides])
     rate = np.einsum("spi,si->p", gyr_phases, axes) / len(axes)
-    acc_norm = residuals.phase_resample(t, np.linalg.norm(acc, axis=1), sig.strides, POINTS).mean(0)
+    acc_norm = phase_resample(t, np.linalg.norm(acc, axis=1), sig.strides, settings.PROFILE_POINTS).mean(0)
     period = float(np.median(t[sig.strides[:, 1]] - t[sig.strides[:, 0]]))
     return StrideProfile(rate, _angle(rate, period), acc_norm, period)
 
 
 def model_profile(gait: GaitParams, impact: ImpactParams) -> StrideProfile:
     """The simulator's pitch over one steady stride of ``gait`` / ``impact`` on the same phase grid (origin where
-    |rate| last rose above ``residuals.QUIET_RATE_DPS`` before mid foot flat)."""
-    steady = dataclasses.replace(gait, stride_length_sd_m=0.0, cycle_sd_frac=0.0, pitch_sd_deg=0.0,
-                                 stand_start_s=0.5, stand_end_s=0.5)
+    |rate| last rose above ``settings.QUIET_RATE_DPS`` before mid foot flat)."""
+    steady = dataclasses.replace(gait, stride_length_sd_m=0.0, cycle_sd_frac=0.0, pitch_sd=0.0,
+                                 stand_start_s=settings.MIN_REST_S, stand_end_s=settings.MIN_REST_S)
     walk = Walk(path=paths.straight(4 * steady.stride_length_m, 0.0), gait=steady, impact=impact)
     plan = plan_stances(walk, np.random.default_rng(0))
     k = 2
     grid = np.linspace(plan.t_ic[k - 1], plan.t_ho[k + 1], 4000)
     angle, rate = np.degrees(pitch_profile(plan, steady, impact).stack(grid)[:2])
-    loud = np.flatnonzero(np.abs(rate) >= residuals.QUIET_RATE_DPS)
+    loud = np.flatnonzero(np.abs(rate) >= settings.QUIET_RATE_DPS)
     onsets = []
-    for j in (k, k + 1):  # like residuals.gyro_onsets: the first quiet point after the last loud one
+    for j in (k, k + 1):  # like strides.gyro_onsets: the first quiet point after the last loud one
         before = loud[grid[loud] < 0.5 * (plan.t_ff[j] + plan.t_ho[j])]
         onsets.append(grid[before[-1] + 1] if len(before) else plan.t_ff[j])
-    at = onsets[0] + np.linspace(0.0, 1.0, POINTS, endpoint=False) * (onsets[1] - onsets[0])
+    at = onsets[0] + np.linspace(0.0, 1.0, settings.PROFILE_POINTS, endpoint=False) * (onsets[1] - onsets[0])
     return StrideProfile(np.interp(at, grid, rate), np.interp(at, grid, angle) - np.interp(onsets[0], grid, angle),
-                         np.full(POINTS, np.nan), onsets[1] - onsets[0])
+                         np.full(settings.PROFILE_POINTS, np.nan), onsets[1] - onsets[0])
 
 
 def initial_guess(measured: StrideProfile) -> dict:
     """Gait events, pitch angles and rates read off the measured profile (module docstring, step 1)."""
     phase, rate, angle = measured.phase, measured.rate, measured.angle
-    late = phase > 0.6
+    late = phase > settings.HEEL_STRIKE_AFTER_PHASE
     i_ic = int(np.flatnonzero(late)[np.argmax(measured.acc_norm[late])]) if np.any(np.isfinite(measured.acc_norm)) \
         else int(np.flatnonzero(late)[np.argmin(angle[late])])
-    early = phase < phase[i_ic] - 0.15
+    early = phase < phase[i_ic] - settings.TOE_OFF_BEFORE_STRIKE_PHASE
     i_to = int(np.argmax(np.where(early, rate, -np.inf)))
-    rising = np.flatnonzero((rate[:i_to] < STANCE_FLOOR * rate[i_to]))
+    rising = np.flatnonzero((rate[:i_to] < settings.STANCE_FLOOR * rate[i_to]))
     i_ho = int(rising[-1]) if len(rising) else i_to // 2
-    quiet = np.flatnonzero(np.abs(rate[:i_ho + 1]) < STANCE_FLOOR * rate[i_to])
+    quiet = np.flatnonzero(np.abs(rate[:i_ho + 1]) < settings.STANCE_FLOOR * rate[i_to])
     i_ff = int(quiet[0]) if len(quiet) else 0
-    rocker = np.r_[i_ic:POINTS]
+    rocker = np.r_[i_ic:settings.PROFILE_POINTS]
     i_slap = int(rocker[np.argmax(rate[rocker])])
     period = measured.period_s
     rocker_frac = 1.0 - phase[i_ic] + phase[i_ff]
@@ -129,15 +119,18 @@ def initial_guess(measured: StrideProfile) -> dict:
         "pitch_accel_heel_strike_dps2": accel[i_ic],
         "pitch_toe_off_deg": angle[i_to], "pitch_rate_toe_off_dps": rate[i_to], "pitch_accel_toe_off_dps2": accel[i_to],
         "slap_rate_dps": max(rate[i_slap], 0.0),
-        "slap_duration_s": min((1.0 - phase[i_slap] + phase[i_ff]) * period, 0.7 * rocker_frac * period),
+        "slap_duration_s": min((1.0 - phase[i_slap] + phase[i_ff]) * period,
+                               settings.MAX_SLAP_ROCKER_SHARE * rocker_frac * period),
     }
 
 
 def _apply(values: dict, gait: GaitParams, impact: ImpactParams) -> tuple[GaitParams, ImpactParams]:
+    """``gait`` and ``impact`` with the fitted scenario keys ``values`` (their units) and the swing fraction."""
     values = dict(values)
     values["swing_frac"] = 1.0 - values["heel_rocker_frac"] - values["foot_flat_frac"] - values["push_off_frac"]
-    return (dataclasses.replace(gait, **{k: v for k, v in values.items() if k in GAIT_FIELDS}),
-            dataclasses.replace(impact, **{k: v for k, v in values.items() if k not in GAIT_FIELDS}))
+    impact_keys = {name for name, section, _, _ in settings.PITCH_FIT_BOUNDS if section == "impact"}
+    return (fill(GaitParams, {k: v for k, v in values.items() if k not in impact_keys}, "<pitch fit> [gait]", gait),
+            fill(ImpactParams, {k: v for k, v in values.items() if k in impact_keys}, "<pitch fit> [impact]", impact))
 
 
 def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactParams) -> tuple[dict, dict]:
@@ -148,41 +141,44 @@ def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactP
     changes : {"gait": {...}, "impact": {...}} to merge into a scenario document (swing_frac included).
     quality : rms rate misfit (deg/s) of the feature estimate and of the fit, and the fitted pitch extremes.
     """
-    names = [name for name, _, _, _ in FITTED]
-    low = np.array([lo for _, _, lo, _ in FITTED])
-    high = np.array([hi for _, _, _, hi in FITTED])
+    names = [name for name, _, _, _ in settings.PITCH_FIT_BOUNDS]
+    low = np.array([lo for _, _, lo, _ in settings.PITCH_FIT_BOUNDS])
+    high = np.array([hi for _, _, _, hi in settings.PITCH_FIT_BOUNDS])
     inside = 1e-6 * (high - low)
     guess = initial_guess(measured)
+    given = {"gait": section_table(gait), "impact": section_table(impact)}
     starts = {"features": np.array([guess[n] for n in names], float),
-              "given": np.array([getattr(impact if sec == "impact" else gait, n) for n, sec, _, _ in FITTED], float)}
+              "given": np.array([given[sec][n] for n, sec, _, _ in settings.PITCH_FIT_BOUNDS], float)}
     extremes = np.array([measured.angle.max(), measured.angle.min()])
 
     def cost(x):
         g, i = _apply(dict(zip(names, x)), gait, impact)
-        if g.swing_frac < MIN_SWING_FRAC:
-            return np.full(POINTS + 2, 1e3 * (1.0 + MIN_SWING_FRAC - g.swing_frac))
+        if g.swing_frac < settings.MIN_SWING_FRAC:
+            return np.full(settings.PROFILE_POINTS + 2, 1e3 * (1.0 + settings.MIN_SWING_FRAC - g.swing_frac))
         try:
             validate_gait(g, i, MicroMotionParams(), "<pitch fit>")
         except ScenarioError:
-            return np.full(POINTS + 2, 1e3)
+            return np.full(settings.PROFILE_POINTS + 2, 1e3)
         model = model_profile(g, i)
         return np.concatenate([model.rate - measured.rate,
-                               ANGLE_WEIGHT * (np.array([model.angle.max(), model.angle.min()]) - extremes)])
+                               settings.ANGLE_WEIGHT * (np.array([model.angle.max(), model.angle.min()]) - extremes)])
 
     costs = {}
     for label, x in starts.items():
         starts[label] = np.clip(x, low + inside, high - inside)
         costs[label] = float(np.sum(cost(starts[label]) ** 2))
     origin = min(costs, key=costs.get)
-    found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low, diff_step=1e-3,
-                          max_nfev=MAX_EVALUATIONS)
+    found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low,
+                          diff_step=settings.PITCH_FIT_DIFF_STEP,
+                          max_nfev=settings.MAX_EVALUATIONS)
     best = found.x if np.sum(found.fun ** 2) <= costs[origin] else starts[origin]
     g, i = _apply(dict(zip(names, best)), gait, impact)
-    changes = {"gait": {n: float(getattr(g, n)) for n, sec, _, _ in FITTED if sec == "gait"},
-               "impact": {n: float(getattr(i, n)) for n, sec, _, _ in FITTED if sec == "impact"}}
+    changes = {"gait": {n: float(x) for (n, sec, _, _), x in zip(settings.PITCH_FIT_BOUNDS, best) if sec == "gait"},
+               "impact": {n: float(x) for (n, sec, _, _), x in zip(settings.PITCH_FIT_BOUNDS, best) if sec == "impact"}}
     changes["gait"]["swing_frac"] = float(g.swing_frac)
     model = model_profile(g, i)
-    quality = {"start": origin, "rms_misfit_at_starts": {k: float(np.sqrt(v / (POINTS + 2))) for k, v in costs.items()},
+    quality = {"start": origin,
+               "rms_misfit_at_starts": {k: float(np.sqrt(v / (settings.PROFILE_POINTS + 2))) for k, v in costs.items()},
                "rms_rate_misfit_fit_dps": float(np.sqrt(np.mean((model.rate - measured.rate) ** 2))),
                "pitch_extremes_measured_deg": extremes.tolist(),
                "pitch_extremes_twin_deg": [float(model.angle.max()), float(model.angle.min())]}

@@ -9,8 +9,6 @@ user can save as TOML and simulate).
 
 from __future__ import annotations
 
-import json
-import math
 from pathlib import Path
 
 import matplotlib
@@ -19,35 +17,29 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from nav.files import jsonable  # noqa: E402
+from nav.files import jsonable, write_json  # noqa: E402
 
+from ..numbers import shown  # noqa: E402
 from . import attribution as att  # noqa: E402
-from .residuals import CHANNELS, NOISE_LEVEL  # noqa: E402
+from . import settings  # noqa: E402
+from .signature import CHANNELS  # noqa: E402
 
 
 def attribution_document(result: att.LoopResult, label: str) -> dict:
     """The content of ``attribution.json`` (module docstring)."""
     return jsonable({
         "recording": label,
-        "noise_level": f"|residual| <= {NOISE_LEVEL} x uncertainty",
-        "explained_threshold": att.EXPLAINED_FRACTION,
+        "noise_level": f"|residual| <= {settings.NOISE_LEVEL} x uncertainty",
+        "explained_threshold": settings.EXPLAINED_FRACTION,
         "attributions": result.attributions,
         "navigation": result.navigation_summary(),
         "comparison_noise": result.noise,
         "residuals_before": {k: r.as_dict() for k, r in result.residuals_before.items()},
         "residuals_after": {k: r.as_dict() for k, r in result.residuals_after.items()},
         "effect_context": result.context,
-        "twin_before": {"scenario": result.twin_before.doc, "fit_notes": result.twin_before.notes},
-        "twin_after": {"scenario": result.twin_after.doc},
+        "twin_before": {"scenario": result.twin_before.document(), "fit_notes": result.twin_before.notes},
+        "twin_after": {"scenario": result.twin_after.document()},
     })
-
-
-def _fmt(x, digits: int = 4) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "-"
-    if isinstance(x, str):
-        return x
-    return f"{x:.{digits}g}"
 
 
 def _figures(result: att.LoopResult, folder: Path) -> list[str]:
@@ -89,7 +81,7 @@ def _figures(result: att.LoopResult, folder: Path) -> list[str]:
     y = np.arange(len(keys))
     ax.barh(y + 0.2, z_before, 0.4, label="before", color="C0")
     ax.barh(y - 0.2, z_after, 0.4, label="after", color="C3")
-    ax.axvline(NOISE_LEVEL, color="k", ls=":", lw=1)
+    ax.axvline(settings.NOISE_LEVEL, color="k", ls=":", lw=1)
     ax.set_yticks(y, keys, fontsize=8)
     ax.set_xscale("symlog", linthresh=1)
     ax.invert_yaxis()
@@ -107,18 +99,18 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
     lines = [f"# Sim-to-real loop: {label}", "",
              f"Twin: {result.twin_before.notes.get('path', '')}; track from the "
              f"{result.twin_before.notes.get('track', '')}. Residual = recording - twin; z = |residual| / "
-             f"uncertainty; at the noise level when z <= {NOISE_LEVEL}. An effect is named when it explains at "
-             f"least {att.EXPLAINED_FRACTION:.0%} of the residual acted on and lowers the total misfit.", "",
+             f"uncertainty; at the noise level when z <= {settings.NOISE_LEVEL}. An effect is named when it "
+             f"explains at least {settings.EXPLAINED_FRACTION:.0%} of the residual acted on and lowers the total misfit.", "",
              "## Attribution", "",
              "| residual | z before | effect | magnitude | before | after | uncertainty after | explained |",
              "|---|---|---|---|---|---|---|---|"]
     for a in result.attributions:
-        mag = f"{_fmt(a['magnitude'])} {a['magnitude_unit']}" if a["magnitude"] is not None else "-"
+        mag = f"{shown(a['magnitude'])} {a['magnitude_unit']}" if a["magnitude"] is not None else "-"
         best = a.get("best_candidate") or {}
         effect = a["effect"] if a["effect"] != "unexplained" else (
             f"unexplained (best: {best.get('effect', '-')}, {best.get('fraction_explained', 0):.0%})")
-        lines.append(f"| {a['residual']} ({a['unit']}) | {_fmt(a['z_before'], 3)} | {effect} | {mag} | "
-                     f"{_fmt(a['residual_before'])} | {_fmt(a['residual_after'])} | {_fmt(a['uncertainty_after'])} | "
+        lines.append(f"| {a['residual']} ({a['unit']}) | {shown(a['z_before'], '.3g')} | {effect} | {mag} | "
+                     f"{shown(a['residual_before'])} | {shown(a['residual_after'])} | {shown(a['uncertainty_after'])} | "
                      f"{a['fraction_explained']:.0%} |")
     if not result.attributions:
         lines.append("| (no residual above the noise level) | | | | | | | |")
@@ -126,15 +118,15 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
               "| metric | measured | twin before | twin after | discrepancy before | discrepancy after |",
               "|---|---|---|---|---|---|"]
     for key, v in result.navigation_summary().items():
-        lines.append(f"| {key} ({v['unit']}) | {_fmt(v['measured'])} | {_fmt(v['twin_before'])} | "
-                     f"{_fmt(v['twin_after'])} | {_fmt(v['discrepancy_before'])} | {_fmt(v['discrepancy_after'])} |")
+        lines.append(f"| {key} ({v['unit']}) | {shown(v['measured'])} | {shown(v['twin_before'])} | "
+                     f"{shown(v['twin_after'])} | {shown(v['discrepancy_before'])} | {shown(v['discrepancy_after'])} |")
     lines += ["", "## All residuals", "", "| residual | unit | recording | twin before | residual before | z before "
               "| twin after | residual after | z after |", "|---|---|---|---|---|---|---|---|---|"]
     for key in sorted(result.residuals_before, key=lambda k: -np.nan_to_num(result.residuals_before[k].z)):
         b = result.residuals_before[key]
         a = result.residuals_after.get(key)
-        lines.append(f"| {key} | {b.unit} | {_fmt(b.measured)} | {_fmt(b.twin)} | {_fmt(b.value)} | {_fmt(b.z, 3)} | "
-                     f"{_fmt(a.twin) if a else '-'} | {_fmt(a.value) if a else '-'} | {_fmt(a.z, 3) if a else '-'} |")
+        lines.append(f"| {key} | {b.unit} | {shown(b.measured)} | {shown(b.twin)} | {shown(b.value)} | {shown(b.z, '.3g')} | "
+                     f"{shown(a.twin) if a else '-'} | {shown(a.value) if a else '-'} | {shown(a.z, '.3g') if a else '-'} |")
     lines += ["", "## Figures", ""] + [f"![{name}]({name})" for name in figures] + [""]
     return "\n".join(lines)
 
@@ -143,7 +135,7 @@ def write_result(result: att.LoopResult, folder: Path, label: str) -> dict:
     """Write attribution.json, report.md and the figures into ``folder`` (which must exist); returns the
     attribution document."""
     doc = attribution_document(result, label)
-    (folder / "attribution.json").write_text(json.dumps(doc, indent=1))
+    write_json(folder / "attribution.json", doc)
     figures = _figures(result, folder)
     (folder / "report.md").write_text(markdown(result, label, figures))
     return doc

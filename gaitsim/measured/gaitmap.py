@@ -35,11 +35,11 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, Slerp
 
 from nav import quaternion as quat
+from nav.constants import STANDARD_GRAVITY
 from nav.recording import Recording, RecordingError, Reference
 
 from . import mocap
 from .quality import (
-    STANDARD_GRAVITY,
     frame_checks,
     nan_counts,
     saturation_counts,
@@ -47,6 +47,7 @@ from .quality import (
     warn_frame_problems,
     warn_quality,
 )
+from .table import read_csv
 
 DATASET = "gaitmap-healthy"
 IMU_RATE_HZ = 204.8
@@ -123,15 +124,6 @@ class FootAlignment:
         }
 
 
-def _read_two_row_header(path: Path) -> tuple[list[str], list[str]]:
-    if not path.exists():
-        raise RecordingError(f"{path}: file not found")
-    with open(path) as fh:
-        first = fh.readline().strip().split(",")[1:]
-        second = fh.readline().strip().split(",")[1:]
-    return first, second
-
-
 def _column_index(path: Path, header: tuple[list[str], list[str]], group: str, name: str) -> int:
     for k, key in enumerate(zip(*header)):
         if key == (group, name):
@@ -153,8 +145,8 @@ def read_imu(root: Path) -> tuple[np.ndarray, dict[str, tuple[np.ndarray, np.nda
     quality : per-file counts (rows, index steps, NaNs).
     """
     path = Path(root) / DATASET / "imu_sample.csv"
-    header = _read_two_row_header(path)
-    table = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
+    rows, table = read_csv(path, header_rows=2)
+    header = (rows[0][1:], rows[1][1:])  # (group, name) of every column after the index
     index = table[:, 0]
     quality = {"file": path.name, **timestamp_report(index),
                "index_steps_not_one": int(np.count_nonzero(np.diff(index) != 1))}
@@ -181,8 +173,8 @@ def read_markers(root: Path) -> tuple[np.ndarray, dict[str, dict[str, np.ndarray
     quality : per-marker NaN sample counts.
     """
     path = Path(root) / DATASET / "mocap_sample.csv"
-    header = _read_two_row_header(path)
-    table = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
+    rows, table = read_csv(path, header_rows=2)
+    header = (rows[0][1:], rows[1][1:])  # (group, name) of every column after the index
     markers = {}
     for side in SIDES:
         markers[side] = {

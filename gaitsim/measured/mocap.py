@@ -18,8 +18,9 @@ from scipy.interpolate import CubicSpline
 from scipy.signal import butter, filtfilt
 
 from nav import quaternion as quat
+from nav.constants import DEFAULT_GRAVITY
 
-GRAVITY_WORLD = np.array([0.0, 0.0, -9.81])
+GRAVITY_WORLD = np.array([0.0, 0.0, -DEFAULT_GRAVITY])
 """m/s^2, gravity in a z-up world frame."""
 
 

@@ -11,11 +11,7 @@ import warnings
 
 import numpy as np
 
-STANDARD_GRAVITY = 9.80665
-"""m/s^2 per g: the unit definition used to convert accelerometer readings given in g."""
-
-EXPECTED_GRAVITY = 9.81
-"""m/s^2, the project's gravity magnitude; a static |specific force| far from it flags a unit error."""
+from nav.constants import DEFAULT_GRAVITY
 
 
 class DataQualityWarning(UserWarning):
@@ -210,9 +206,9 @@ def warn_frame_problems(source: str, checks: dict, tolerance: float = 0.05) -> l
     """
     problems = []
     norm = checks["still_acc_norm"]
-    if not abs(norm - EXPECTED_GRAVITY) <= tolerance * EXPECTED_GRAVITY:
+    if not abs(norm - DEFAULT_GRAVITY) <= tolerance * DEFAULT_GRAVITY:
         problems.append(f"still |specific force| is {norm:.3f} m/s^2, expected 9.81 within {tolerance:.0%} (units?)")
-    if not checks["still_acc_mean"][2] > 0.7 * EXPECTED_GRAVITY:
+    if not checks["still_acc_mean"][2] > 0.7 * DEFAULT_GRAVITY:
         problems.append(f"gravity is not on +z at rest: mean still specific force {checks['still_acc_mean']} m/s^2")
     if checks["dominant_gyro_axis"] != 1:
         problems.append(f"dominant angular-rate axis is {'xyz'[checks['dominant_gyro_axis']]}, expected y (pitch)")

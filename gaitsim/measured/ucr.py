@@ -27,6 +27,7 @@ import numpy as np
 from nav.recording import Recording, RecordingError, Reference
 
 from .quality import frame_checks, nan_counts, timestamp_report, warn_frame_problems, warn_quality
+from .table import read_csv
 
 DATASET = "ucr-fgo"
 RATE_HZ = 60.0
@@ -37,16 +38,6 @@ REFERENCE_HEADER = ["time_index", "pos_left_x", "pos_left_y", "pos_left_z", "pos
 Z_DOWN_TO_Z_UP = np.diag([1.0, -1.0, -1.0])  # rotation by 180 deg about x
 CREDIT = ("Azurehappen/Constrained-ZUPT-FGO measData/, MIT, (c) 2025 UC Regents; Hu & Hu, 'Constrained Factor Graph "
           "Optimization for Robust Networked Pedestrian Inertial Navigation', IEEE/ION PLANS 2025")
-
-
-def _read_table(path: Path, expected_header: list[str]) -> np.ndarray:
-    if not path.exists():
-        raise RecordingError(f"{path}: file not found")
-    with open(path) as fh:
-        header = fh.readline().strip().split(",")
-    if header != expected_header:
-        raise RecordingError(f"{path}: header {header}, expected {expected_header}")
-    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
 
 
 def _heading_change(xy: np.ndarray, rate_hz: float, min_speed: float = 0.2) -> float:
@@ -67,7 +58,7 @@ def ucr_zero_velocity_labels(side: str, root: str | Path) -> np.ndarray:
     """
     if side not in SIDES:
         raise ValueError(f"ucr_zero_velocity_labels: side={side!r}; allowed: {sorted(SIDES)}")
-    table = _read_table(Path(root) / DATASET / SIDES[side], IMU_HEADER)
+    table = read_csv(Path(root) / DATASET / SIDES[side], 1, IMU_HEADER)[1]
     return table[:, 7] > 0.5
 
 
@@ -80,13 +71,13 @@ def load_ucr(root: str | Path) -> list[Recording]:
     """
     root = Path(root)
     ref_path = root / DATASET / "positionGt.csv"
-    ref_table = _read_table(ref_path, REFERENCE_HEADER)
+    ref_table = read_csv(ref_path, 1, REFERENCE_HEADER)[1]
     ref_quality = {"file": ref_path.name, **timestamp_report(ref_table[:, 0]),
                    "nan_samples": nan_counts({"left": ref_table[:, 1:4], "right": ref_table[:, 4:7]})}
     recordings = []
     for k, (side, name) in enumerate(SIDES.items()):
         path = root / DATASET / name
-        table = _read_table(path, IMU_HEADER)
+        table = read_csv(path, 1, IMU_HEADER)[1]
         index = table[:, 0]
         stamps = timestamp_report(index)
         stamps["index_steps_not_one"] = int(np.count_nonzero(np.diff(index) != 1))

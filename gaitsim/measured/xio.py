@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from nav.recording import Recording, RecordingError, Reference
+from nav.constants import STANDARD_GRAVITY
+from nav.recording import Recording, Reference
 
 from .quality import (
-    STANDARD_GRAVITY,
     frame_checks,
     jitter_stats,
     nan_counts,
@@ -36,6 +36,7 @@ from .quality import (
     warn_frame_problems,
     warn_quality,
 )
+from .table import read_csv
 
 DATASET = "xio-ngimu"
 WALKS = ("short_walk", "long_walk")
@@ -61,13 +62,7 @@ def read_walk(path: Path) -> tuple[np.ndarray, dict]:
     quality : counts (rows, repeated, dropped, of which identical to the previous row, NaNs) and jitter statistics
         of the kept timestamps.
     """
-    if not path.exists():
-        raise RecordingError(f"{path}: file not found")
-    with open(path) as fh:
-        header = fh.readline().strip().split(",")
-    if header != HEADER:
-        raise RecordingError(f"{path}: header {header}, expected {HEADER}")
-    raw = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    _, raw = read_csv(path, 1, HEADER)
     drop = non_increasing_time_mask(raw[:, 0])
     identical = np.zeros(len(raw), dtype=bool)
     identical[1:] = np.all(raw[1:] == raw[:-1], axis=1)

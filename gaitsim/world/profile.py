@@ -33,14 +33,14 @@ def _rot_z(yaw: float) -> np.ndarray:
 
 def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams) -> smooth.Piecewise:
     """Foot pitch (rad) of a walk: a Hermite through knots (value, rate, acceleration, 0, 0) at each stance's
-    heel strike (its drawn pitch, ``pitch_rate_heel_strike_dps``, ``pitch_accel_heel_strike_dps2``), start of
-    the forefoot slap (``slap_rate_dps``, with the angle left to stop at that rate), foot flat and heel off
-    (level and still) and toe off (its drawn pitch, ``pitch_rate_toe_off_dps``, ``pitch_accel_toe_off_dps2``);
-    level at the start and the end."""
+    heel strike (its drawn pitch, ``pitch_rate_heel_strike``, ``pitch_accel_heel_strike``), start of the
+    forefoot slap (``slap_rate``, with the angle left to stop at that rate), foot flat and heel off (level and
+    still) and toe off (its drawn pitch, ``pitch_rate_toe_off``, ``pitch_accel_toe_off``); level at the start
+    and the end."""
     n = plan.n_strides
-    slap_rate = np.deg2rad(impact.slap_rate_dps)
-    strike = np.deg2rad([gait.pitch_rate_heel_strike_dps, gait.pitch_accel_heel_strike_dps2])
-    toe_off = np.deg2rad([gait.pitch_rate_toe_off_dps, gait.pitch_accel_toe_off_dps2])
+    slap_rate = impact.slap_rate
+    strike = (gait.pitch_rate_heel_strike, gait.pitch_accel_heel_strike)
+    toe_off = (gait.pitch_rate_toe_off, gait.pitch_accel_toe_off)
     knots = [(0.0, 0.0, 0.0, 0.0)]
     for k in range(n + 1):
         if k > 0:
@@ -74,7 +74,7 @@ class FootTrajectory:
         g, imp, mm = walk.gait, walk.impact, walk.micro
         n = plan.n_strides
         self.walk_yaw = np.unwrap(plan.yaw)
-        self.foot_yaw = self.walk_yaw + np.deg2rad(g.toe_out_deg)
+        self.foot_yaw = self.walk_yaw + g.toe_out
         self.frames = [_rot_z(y) for y in self.walk_yaw]
 
         self.pitch = pitch_profile(plan, g, imp)
@@ -117,7 +117,7 @@ class FootTrajectory:
         """Roll-over of the walking stances: rate +w at t_ff falling linearly to -w at t_ho (a quadratic angle),
         joined C4 to zero at t_ic and t_to."""
         plan, mm = self.plan, self.walk.micro
-        rate = np.deg2rad(mm.stance_roll_rate_dps)
+        rate = mm.stance_roll_rate
         if not (mm.enabled and rate and plan.walking.any()):
             return None
         knots, stacks = [], []
@@ -133,7 +133,7 @@ class FootTrajectory:
         """Sustained stance rotation per walking stance k: (roll, pitch, yaw) angle pieces (rad) of the rate
         plateau inside foot flat, and the angles (3,) rad reached at heel off."""
         plan, mm = self.plan, self.walk.micro
-        rates = np.deg2rad(np.asarray(mm.stance_rotation_dps, float))
+        rates = np.asarray(mm.stance_rotation_rate, float)
         if not (mm.enabled and np.any(rates) and plan.walking.any()):
             return None
         ramp = mm.creep_ramp_s
@@ -262,7 +262,7 @@ class FootTrajectory:
         for k in range(plan.n_strides):
             dur = plan.t_ic[k + 1] - plan.t_to[k]
             yaw += smooth.smoothstep_stack(t, plan.t_to[k], dur, 0.0, self.foot_yaw[k + 1] - self.foot_yaw[k])
-            roll += smooth.lift(t, plan.t_to[k], dur, np.deg2rad(g.swing_roll_deg))
+            roll += smooth.lift(t, plan.t_to[k], dur, g.swing_roll)
         if self.stance_roll is not None:
             roll += self.stance_roll.stack(t)
         for k in (self.rotation or {}):

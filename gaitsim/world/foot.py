@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 
 from nav import quaternion as quat
+from nav.constants import DEFAULT_GRAVITY
 
 MOUNTS = ("toes", "instep", "heel")
 
@@ -25,12 +26,12 @@ class Mount:
     ----------
     site : one of ``MOUNTS``; the nominal mount point on the foot model. Default "toes" (the seed paper's).
     offset_m : (3,) m, added to the mount point, foot frame.
-    rpy_deg : (3,) deg, (roll, pitch, yaw) of the sensor axes relative to the foot axes, R = Rz Ry Rx.
+    rpy : (3,) rad, (roll, pitch, yaw) of the sensor axes relative to the foot axes, R = Rz Ry Rx.
     """
 
     site: str = "toes"
     offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass
@@ -56,13 +57,13 @@ class FootModel:
     Parameters
     ----------
     mount : Mount
-    gravity : m/s^2, magnitude of gravity along -z. Default 9.81.
+    gravity : m/s^2, magnitude of gravity along -z. Default nav's DEFAULT_GRAVITY (9.81).
     """
 
-    def __init__(self, mount: Mount = Mount(), gravity: float = 9.81):
+    def __init__(self, mount: Mount = Mount(), gravity: float = DEFAULT_GRAVITY):
         if mount.site not in MOUNTS:
             raise ValueError(f"mount site {mount.site!r} is not one of {MOUNTS}")
-        xml = resources.files("gaitsim").joinpath("assets/foot.xml").read_text()
+        xml = resources.files("gaitsim.world").joinpath("assets/foot.xml").read_text()
         self.model = mujoco.MjModel.from_xml_string(xml)
         self.model.opt.gravity[:] = (0.0, 0.0, -gravity)
         self.data = mujoco.MjData(self.model)
@@ -71,7 +72,7 @@ class FootModel:
         self.toe_length = float(m.site_pos[site("toe_contact")][0] - m.site_pos[site("heel_contact")][0])
         imu = site("imu")
         m.site_pos[imu] = m.site_pos[site(f"mount_{mount.site}")] + np.asarray(mount.offset_m, float)
-        roll, pitch, yaw = np.deg2rad(mount.rpy_deg)
+        roll, pitch, yaw = mount.rpy
         m.site_quat[imu] = quat.from_euler_zyx(yaw, pitch, roll)
         m.site_sameframe[imu] = 0  # the compiler flagged it as coinciding with the body frame; it no longer does
         self.mount = mount

@@ -36,7 +36,6 @@ import os
 import pickle
 import re
 import sys
-import tempfile
 import traceback
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import closing
@@ -45,6 +44,8 @@ from typing import Any
 
 import numpy as np
 from tqdm import tqdm
+
+from nav.files import write_text_atomic
 
 from gaitsim.errors import ScenarioError
 
@@ -286,18 +287,7 @@ def _store(path: Path, task: dict, digest: str, result_json: str) -> dict:
         "result": json.loads(result_json),
     }
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle = tempfile.NamedTemporaryFile(
-        "w", encoding="utf-8", dir=path.parent, prefix=f".{path.name}.", suffix=".tmp", delete=False
-    )
-    try:
-        with handle:
-            handle.write(json.dumps(record) + "\n")
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(handle.name, path)
-    except BaseException:
-        Path(handle.name).unlink(missing_ok=True)
-        raise
+    write_text_atomic(path, json.dumps(record) + "\n")
     return record["result"]
 
 

@@ -6,6 +6,7 @@ counter-clockwise from east (the world x axis), in rad inside, deg in scenario f
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,17 +46,24 @@ class Segment:
         return (float(p[0, 0]), float(p[0, 1])), float(yaw[0])
 
 
+@dataclass(frozen=True)
 class Path:
-    """A chain of segments, each starting where the previous one ends.
+    """A chain of segments, each starting where the previous one ends (equal and hashable by value).
 
-    Parameters
+    Attributes
     ----------
-    segments : list of :class:`Segment`.
+    segments : tuple of :class:`Segment`.
     """
 
-    def __init__(self, segments: list[Segment]):
-        self.segments = segments
-        self.offsets = np.concatenate([[0.0], np.cumsum([seg.length for seg in segments])])
+    segments: tuple[Segment, ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "segments", tuple(self.segments))
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """(len(segments) + 1,) m, arclength at the start of each segment and at the end."""
+        return np.concatenate([[0.0], np.cumsum([seg.length for seg in self.segments])])
 
     @property
     def length(self) -> float:
@@ -91,6 +99,25 @@ def arc(radius: float, turn: float, yaw: float, start=(0.0, 0.0)) -> Path:
     return Path([Segment(tuple(start), yaw, abs(turn) * radius, np.sign(turn) / radius)])
 
 
+def _legs(waypoints: np.ndarray, corner_radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Leg lengths (m), leg yaws (rad), signed corner turns in (-pi, pi] (rad) and the straight part of each leg
+    left once its corners are rounded with ``corner_radius`` (m; negative where the corners do not fit)."""
+    legs = np.diff(np.asarray(waypoints, float), axis=0)
+    lengths = np.linalg.norm(legs, axis=1)
+    yaws = np.arctan2(legs[:, 1], legs[:, 0])
+    turns = np.angle(np.exp(1j * np.diff(yaws)))
+    cut = corner_radius * np.tan(np.abs(turns) / 2)  # tangent length taken off each leg per corner
+    remaining = lengths - np.concatenate([[0.0], cut]) - np.concatenate([cut, [0.0]])
+    return lengths, yaws, turns, remaining
+
+
+def corners_fit(waypoints: np.ndarray, corner_radius: float) -> bool:
+    """True when consecutive waypoints (N, 2) m differ and every corner rounded with ``corner_radius`` (m) fits
+    on its two legs."""
+    lengths, _, _, remaining = _legs(waypoints, corner_radius)
+    return bool(np.all(lengths > 0) and np.all(remaining >= -1e-9))
+
+
 def polyline(waypoints: np.ndarray, corner_radius: float) -> Path:
     """Straight legs between waypoints (N, 2) m, each interior corner rounded by an arc of ``corner_radius``.
 
@@ -98,14 +125,7 @@ def polyline(waypoints: np.ndarray, corner_radius: float) -> Path:
     end. Raises ValueError (with the corner index) when a rounded corner does not fit on its legs.
     """
     w = np.asarray(waypoints, float)
-    legs = np.diff(w, axis=0)
-    lengths = np.linalg.norm(legs, axis=1)
-    yaws = np.arctan2(legs[:, 1], legs[:, 0])
-    turns = np.angle(np.exp(1j * np.diff(yaws)))  # signed corner turns in (-pi, pi]
-    cut = corner_radius * np.tan(np.abs(turns) / 2)  # tangent length taken off each leg per corner
-    take_start = np.concatenate([[0.0], cut])
-    take_end = np.concatenate([cut, [0.0]])
-    remaining = lengths - take_start - take_end
+    lengths, yaws, turns, remaining = _legs(w, corner_radius)
     if np.any(remaining < -1e-9):
         bad = int(np.argmin(remaining))
         raise ValueError(
@@ -113,7 +133,7 @@ def polyline(waypoints: np.ndarray, corner_radius: float) -> Path:
         )
     segments: list[Segment] = []
     pos = (float(w[0, 0]), float(w[0, 1]))
-    for i in range(len(legs)):
+    for i in range(len(lengths)):
         seg = Segment(pos, float(yaws[i]), float(max(remaining[i], 0.0)))
         segments.append(seg)
         pos, yaw = seg.end()
@@ -123,3 +143,34 @@ def polyline(waypoints: np.ndarray, corner_radius: float) -> Path:
             segments.append(corner)
             pos, _ = corner.end()
     return Path([s for s in segments if s.length > 0])
+
+
+def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
+    """Ramer-Douglas-Peucker simplification of a 2-D polyline (K, 2) m: the fewest of its points that keep every
+    point within ``tolerance`` (m) of the simplified line."""
+    if len(points) < 3:
+        return points
+    a, b = points[0], points[-1]
+    d = b - a
+    length = np.hypot(*d)
+    rel = points - a
+    dist = np.abs(d[0] * rel[:, 1] - d[1] * rel[:, 0]) / length if length > 0 else np.hypot(rel[:, 0], rel[:, 1])
+    i = int(np.argmax(dist))
+    if dist[i] <= tolerance:
+        return np.array([a, b])
+    return np.vstack([simplify(points[:i + 1], tolerance)[:-1], simplify(points[i:], tolerance)])
+
+
+def hairpins(points: np.ndarray, radius: float, sharpest_turn: float) -> np.ndarray:
+    """Waypoints (K, 2) m with the legs after every corner sharper than ``sharpest_turn`` (rad) moved sideways by
+    two ``radius`` (m) to the turn's side, so that a U-turn becomes a hairpin of two corners of that radius."""
+    pts = points.copy()
+    for i in range(1, len(pts) - 1):
+        d0, d1 = pts[i] - pts[i - 1], pts[i + 1] - pts[i]
+        turn = math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)
+        if abs(turn) > sharpest_turn:
+            u = d0 / np.hypot(*d0)
+            side = np.array([-u[1], u[0]]) * (1.0 if turn >= 0 else -1.0)
+            pts = np.vstack([pts[:i + 1], pts[i] + 2 * radius * side, pts[i + 1:] + 2 * radius * side])
+            return hairpins(pts, radius, sharpest_turn)
+    return pts

@@ -5,11 +5,13 @@ the toe contact), toe off, swing, initial contact (heel strike), heel rocker (ro
 foot flat -> standing at the end. Phase durations are fractions of the gait cycle (one stride of one foot).
 
 Angles: foot pitch is the rotation about the foot's left (y) axis, positive when the toes point down; the foot
-pitch at heel strike is therefore negative (toes up) and at toe off positive (heel up).
+pitch at heel strike is therefore negative (toes up) and at toe off positive (heel up). Every parameter is SI
+(angles in rad, rates in rad/s); scenario files give them in degrees (:mod:`gaitsim.scenario` converts).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,21 +29,21 @@ class GaitParams:
     stride_length_m : m, nominal heel-contact to heel-contact distance of one foot. Default 1.4 (~0.98 m/s).
     heel_rocker_frac, foot_flat_frac, push_off_frac, swing_frac : fractions of the gait cycle, summing to 1.
         Defaults 0.15 / 0.30 / 0.17 / 0.38: stance 62 % (anchors §7), foot flat from 15 % to 45 %.
-    pitch_heel_strike_deg : deg, foot pitch at initial contact (negative: toes up). Default -20.
-    pitch_rate_heel_strike_dps : deg/s, pitch rate at initial contact. Default 60 (forefoot starting down).
-    pitch_accel_heel_strike_dps2 : deg/s^2, pitch acceleration at initial contact. Default 0.
-    pitch_toe_off_deg : deg, foot pitch at toe off (heel up). Default 45.
-    pitch_rate_toe_off_dps : deg/s, pitch rate at toe off. Default 150.
-    pitch_accel_toe_off_dps2 : deg/s^2, pitch acceleration at toe off; measured feet reverse their push-off
+    pitch_heel_strike : rad, foot pitch at initial contact (negative: toes up). Default -20 deg.
+    pitch_rate_heel_strike : rad/s, pitch rate at initial contact. Default 60 deg/s (forefoot starting down).
+    pitch_accel_heel_strike : rad/s^2, pitch acceleration at initial contact. Default 0.
+    pitch_toe_off : rad, foot pitch at toe off (heel up). Default 45 deg.
+    pitch_rate_toe_off : rad/s, pitch rate at toe off. Default 150 deg/s.
+    pitch_accel_toe_off : rad/s^2, pitch acceleration at toe off; measured feet reverse their push-off
         rotation right after toe off (gaitmap: about -8000 deg/s^2), which a zero here cannot show. Default 0.
     swing_height_m : m, heel height at mid-swing. Default 0.08.
     swing_lateral_m : m, sideways excursion of the heel at mid-swing, positive to the left. Default 0.01.
-    swing_roll_deg : deg, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3.
-    toe_out_deg : deg, foot yaw relative to the walking direction during stance (positive: toes to the left).
+    swing_roll : rad, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3 deg.
+    toe_out : rad, foot yaw relative to the walking direction during stance (positive: toes to the left).
         Default 0.
     stride_length_sd_m : m, stride-to-stride standard deviation of the stride length. Default 0.02.
     cycle_sd_frac : relative stride-to-stride standard deviation of the cycle time. Default 0.01.
-    pitch_sd_deg : deg, stride-to-stride standard deviation of the heel-strike and toe-off pitch. Default 1.
+    pitch_sd : rad, stride-to-stride standard deviation of the heel-strike and toe-off pitch. Default 1 deg.
     stand_start_s, stand_end_s : s, standing (foot flat, still) at the start and end. Default 2.0 each.
     """
 
@@ -51,19 +53,19 @@ class GaitParams:
     foot_flat_frac: float = 0.30
     push_off_frac: float = 0.17
     swing_frac: float = 0.38
-    pitch_heel_strike_deg: float = -20.0
-    pitch_rate_heel_strike_dps: float = 60.0
-    pitch_accel_heel_strike_dps2: float = 0.0
-    pitch_toe_off_deg: float = 45.0
-    pitch_rate_toe_off_dps: float = 150.0
-    pitch_accel_toe_off_dps2: float = 0.0
+    pitch_heel_strike: float = math.radians(-20.0)
+    pitch_rate_heel_strike: float = math.radians(60.0)
+    pitch_accel_heel_strike: float = 0.0
+    pitch_toe_off: float = math.radians(45.0)
+    pitch_rate_toe_off: float = math.radians(150.0)
+    pitch_accel_toe_off: float = 0.0
     swing_height_m: float = 0.08
     swing_lateral_m: float = 0.01
-    swing_roll_deg: float = 3.0
-    toe_out_deg: float = 0.0
+    swing_roll: float = math.radians(3.0)
+    toe_out: float = 0.0
     stride_length_sd_m: float = 0.02
     cycle_sd_frac: float = 0.01
-    pitch_sd_deg: float = 1.0
+    pitch_sd: float = math.radians(1.0)
     stand_start_s: float = 2.0
     stand_end_s: float = 2.0
 
@@ -82,7 +84,7 @@ class ImpactParams:
     heel_strike_velocity_mps : (forward, left, up) m/s, heel velocity at initial contact in the walking frame;
         it is brought to zero over ``heel_strike_duration_s`` (heel-pad compression). Default (0.25, 0, -0.3).
     heel_strike_duration_s : s, sharpness of the heel strike. Default 0.012.
-    slap_rate_dps : deg/s, forefoot pitch rate when the forefoot meets the ground. Default 250.
+    slap_rate : rad/s, forefoot pitch rate when the forefoot meets the ground. Default 250 deg/s.
     slap_duration_s : s, time in which the forefoot stops at foot flat (sharpness of the slap). Default 0.025.
     ringing_hz : Hz, natural frequency of a damped vertical oscillation of the foot (shoe/mount ringing) excited
         at each heel strike and forefoot slap. Default 0 (off).
@@ -93,7 +95,7 @@ class ImpactParams:
 
     heel_strike_velocity_mps: tuple[float, float, float] = (0.25, 0.0, -0.3)
     heel_strike_duration_s: float = 0.012
-    slap_rate_dps: float = 250.0
+    slap_rate: float = math.radians(250.0)
     slap_duration_s: float = 0.025
     ringing_hz: float = 0.0
     ringing_damping: float = 0.15
@@ -117,11 +119,11 @@ class MicroMotionParams:
     settle_duration_s : s. Default 0.08.
     heel_off_velocity_mps : m/s, peak of the pulse around heel off. Default (0.02, 0, 0.005).
     heel_off_duration_s : s. Default 0.10.
-    stance_roll_rate_dps : deg/s, stance roll-over (pronation, then supination) about the heel-toe axis: the
+    stance_roll_rate : rad/s, stance roll-over (pronation, then supination) about the heel-toe axis: the
         roll rate is +rate at foot flat, falls linearly through zero at mid foot-flat to -rate at heel off, and
         rises from / returns to zero over the heel rocker / push-off (C4). Rolling about the contact axis moves
         neither contact point. Core-stance mean |rate| is rate/2. Default 0 (a still foot flat).
-    stance_rotation_dps : deg/s, (roll, pitch, yaw) rates of a sustained rotation of the foot during foot flat:
+    stance_rotation_rate : rad/s, (roll, pitch, yaw) rates of a sustained rotation of the foot during foot flat:
         each rate ramps up (C4, over ``creep_ramp_s``) after foot flat, holds, and ramps down to zero at heel
         off, so the foot turns by rate * (foot flat - creep_ramp_s) during the stance; the angle is held through
         the push-off and returned over the swing. The rates are ZYX Euler-angle rates on top of the gait's
@@ -148,8 +150,8 @@ class MicroMotionParams:
     settle_duration_s: float = 0.08
     heel_off_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.005)
     heel_off_duration_s: float = 0.10
-    stance_roll_rate_dps: float = 0.0
-    stance_rotation_dps: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    stance_roll_rate: float = 0.0
+    stance_rotation_rate: tuple[float, float, float] = (0.0, 0.0, 0.0)
     stance_rotation_pivot_frac: tuple[float, float] = (1.0, 0.0)
 
 
@@ -210,7 +212,7 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
     s = np.concatenate([[0.0], np.cumsum(strides)]) * walk.path.length / strides.sum()
     pos, yaw = walk.path.at(s)
     cycles = g.cycle_s * (1.0 + g.cycle_sd_frac * rng.standard_normal(n))
-    pitch_noise = np.deg2rad(g.pitch_sd_deg) * rng.standard_normal((2, n + 1))
+    pitch_noise = g.pitch_sd * rng.standard_normal((2, n + 1))
 
     t_ic = np.zeros(n + 1)
     t_ff = np.zeros(n + 1)
@@ -230,7 +232,7 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
     walking[[0, n]] = False
     return StancePlan(
         t_ic, t_ff, t_ho, t_to, pos, yaw,
-        np.deg2rad(g.pitch_heel_strike_deg) + pitch_noise[0],
-        np.deg2rad(g.pitch_toe_off_deg) + pitch_noise[1],
+        g.pitch_heel_strike + pitch_noise[0],
+        g.pitch_toe_off + pitch_noise[1],
         walking, float(t_end),
     )

@@ -1,0 +1,103 @@
+"""Every tuning constant of the sim-to-real loop, with its unit and what it decides.
+
+The modules of :mod:`gaitsim.loop` read these by name (``settings.NOISE_LEVEL``); none keeps a number of its own.
+"""
+
+from __future__ import annotations
+
+import math
+
+from nav import pipeline
+
+# -- strides (gaitsim.loop.strides) --------------------------------------------------------------------------
+MERGE_GAP_S = 0.04  # s, detected stance runs closer than this are one stance
+MIN_STANCE_S = 0.06  # s, shorter stance runs are ignored
+MAX_STRIDE_S = 3.0  # s, a longer "stride" contains rest
+STRIDE_PERIOD_BAND = (0.6, 1.5)  # 1, a regular stride's period lies within these multiples of the median
+REST_STANCE_SHARE = 0.8  # 1, a stance lasting longer than this share of its stride's period is rest, not gait
+QUIET_RATE_DPS = 40.0  # deg/s, a stride's phase origin is where |w| last fell below this before mid-stance
+PHASE_POINTS = 64  # points of the normalised gait phase the profiles are resampled on
+
+# -- signature (gaitsim.loop.signature) ----------------------------------------------------------------------
+HF_EDGES_HZ = (40.0, 80.0)  # Hz, band edges of the hf40 / hf80 shares of |a| variance
+HF_NYQUIST_MARGIN = 1.25  # 1, a band share is computed only when the Nyquist frequency exceeds edge x this
+LAG_WINDOW_S = 0.06  # s, half-width of the |a| x |dw/dt| cross-correlation curve
+LAG_BAND_HZ = (8.0, 45.0)  # Hz, band pass of both signals before the cross-correlation
+LAG_UPSAMPLE = 16  # 1, the curves are compared on a grid this much finer than the samples
+ONSET_HF_EDGE_HZ = 30.0  # Hz, high-pass edge of |a| for onset_hf
+ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is taken
+BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate
+REST_ACC_NORM_SD_FLOOR = 1e-4  # m/s^2, least sample spread of |f| at rest (a quantised sensor can read one value)
+MIN_TRACK_SAMPLES = 10  # finite position-track samples needed for stance_velocity
+MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives no forward direction (no stance_velocity)
+
+# -- residuals (gaitsim.loop.residuals) ----------------------------------------------------------------------
+NOISE_LEVEL = 3.0  # 1, a residual with |value| <= NOISE_LEVEL x uncertainty is at the noise level
+UNCERTAINTY_FLOOR = {"stance_velocity": 0.0005, "swing_axis_yaw": 0.05}  # m/s, deg: reference / axis resolution
+
+# -- twin fit (gaitsim.loop.twin) ----------------------------------------------------------------------------
+TWIN_SEED = 7  # seed of the twin's simulations
+FIT_ITERATIONS = 2  # rounds of cadence and clearance matching by simulation
+PATH_TOLERANCE_M = 0.3  # m, Ramer-Douglas-Peucker tolerance of the twin's path through the stance centres
+HAIRPIN_TURN = math.radians(120.0)  # rad, a sharper corner of the path is walked as a hairpin
+CORNER_RADII_M = (1.0, 0.75, 0.5)  # m, corner radii tried in turn (then half a stride) for the twin's polyline
+STRAIGHT_MIN_SPAN_M = 0.5  # m, a straight twin walks toward the track's end only when that end is this far away
+DEFAULT_STRIDE_LENGTH_M = 1.4  # m, the twin's stride length when the track gives no stance-to-stance step
+MAX_CYCLE_SD_FRAC = 0.1  # 1, largest stride-to-stride spread of the cycle time the twin is given
+MIN_REST_S = 0.5  # s, least standing time at either end of the twin (the filter aligns on it)
+QUIET_WINDOW_S = 0.5  # s, length of the quietest window (noise, tilt) and least length of a rest for the gyro bias
+REST_MARGIN_S = 0.25  # s, trimmed from both ends of a detected rest before its gyro mean is taken
+MIN_ACC_SD_MPS2 = 1e-5  # m/s^2, least quiet-window accelerometer spread (a twin's noise density from it)
+MIN_GYR_SD_RAD_S = 1e-6  # rad/s, least quiet-window gyro spread
+SWING_HEIGHT_BOUNDS_M = (0.01, 0.3)  # m, range of the twin's swing height after matching the clearance
+NAV_OPTIONS = pipeline.NavOptions(method="rk4")  # both sides are navigated from their IMU samples
+TRUTH_CACHE_SIZE = 8  # simulated walks (ideal sensor) kept per loop run; effects on the sensor re-use them
+
+# -- gait shape fit (gaitsim.loop.gait_fit) ------------------------------------------------------------------
+PROFILE_POINTS = 128  # phase grid of the pitch profiles
+ANGLE_WEIGHT = 10.0  # deg/s of rate misfit per degree of pitch-extreme misfit
+MAX_EVALUATIONS = 600  # least-squares evaluations of the pitch fit
+MIN_SWING_FRAC = 0.25  # 1, smallest swing share of the gait cycle the fit may reach
+STANCE_FLOOR = 0.1  # 1, heel off: where the rate first exceeds this share of the push-off peak
+HEEL_STRIKE_AFTER_PHASE = 0.6  # 1, the heel strike is looked for after this share of the stride (from the onset)
+TOE_OFF_BEFORE_STRIKE_PHASE = 0.15  # 1, the toe off is looked for at least this share of the stride before it
+MAX_SLAP_ROCKER_SHARE = 0.7  # 1, the first guess of the forefoot slap lasts at most this share of the heel rocker
+PITCH_FIT_DIFF_STEP = 1e-3  # 1, relative finite-difference step of the pitch fit's Jacobian
+# (scenario key, section, low, high in the key's unit): what the pitch fit varies; swing_frac = 1 - the stance
+# fractions
+PITCH_FIT_BOUNDS = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", "gait", 0.05, 0.5),
+                    ("push_off_frac", "gait", 0.05, 0.35), ("pitch_heel_strike_deg", "gait", -45.0, -2.0),
+                    ("pitch_rate_heel_strike_dps", "gait", -300.0, 700.0), ("pitch_toe_off_deg", "gait", 5.0, 85.0),
+                    ("pitch_rate_toe_off_dps", "gait", -300.0, 900.0),
+                    ("pitch_accel_toe_off_dps2", "gait", -4e4, 1e4),
+                    ("pitch_accel_heel_strike_dps2", "gait", -2e4, 2e4), ("slap_rate_dps", "impact", 0.0, 900.0),
+                    ("slap_duration_s", "impact", 0.005, 0.15))
+
+# -- sensor position on the foot (gaitsim.loop.mount_fit) ----------------------------------------------------
+PROBE_M = 0.1  # m, how far each probe moves the IMU site
+SITE_BOUNDS_M = ((-0.08, -0.07, 0.0), (0.25, 0.07, 0.12))  # m, foot frame from the heel contact
+
+# -- effects (gaitsim.loop.effects) --------------------------------------------------------------------------
+RINGING_BAND_HZ = 20.0  # Hz, lowest ringing frequency searched in the residual spectrum
+RINGING_SMOOTHING_HZ = 10.0  # Hz, width of the moving average applied to both spectra before their log ratio
+MIN_RINGING_HZ = 5.0  # Hz, the ringing effect is tried only from this frequency up
+CLIP_BAND = 0.01  # 1, a clipped sample lies within this share of the recording's largest accelerometer reading
+MIN_CLIPPED_RUNS = 2  # runs of >= 2 consecutive such samples needed before saturation is tried
+
+# -- attribution (gaitsim.loop.attribution) ------------------------------------------------------------------
+NAV_REPEATS = 3  # re-simulations with other seeds that give the spread of the twin's navigation metrics
+TWIN_OF_TWIN_SEED = 100  # seed offset of the twin's own recordings used to measure the fit floor
+TWIN_OF_TWIN_REPEATS = 2  # twin-of-twin pairs behind the fit floor
+NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_error": 0.05}  # 1, deg/s, m
+EXPLAINED_FRACTION = 0.5  # 1, least share of the acted residual an accepted effect explains
+DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
+MAX_ROUNDS = 20  # residuals acted on per recording at most
+GRID_POINTS = 9  # grid of each effect's magnitude search before the Brent refinement
+BRENT_ITERATIONS = 12  # iterations of the bounded Brent refinement
+BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its bracket
+
+# -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
+BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case
+BLIND_RATE_HZ = 200.0  # Hz, its IMU rate
+BLIND_REFERENCE_RATE_HZ = 100.0  # Hz, its position reference (like a motion tracker)
+BLIND_SEED = 11  # seed of the blind recordings

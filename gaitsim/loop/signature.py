@@ -1,0 +1,298 @@
+"""The stride-normalised signature of a foot-IMU recording.
+
+A *signature* (:func:`signature`) summarises one recording with the same recipe whether it is measured or
+simulated, so two signatures can be compared number by number:
+
+1. Strides from the IMU alone (:mod:`gaitsim.loop.strides`: SHOE with the shared filter's defaults, a stride
+   from one gyro-quiet stance onset to the next, irregular ones dropped).
+2. Per stride (n strides, each statistic's uncertainty is its stride-to-stride standard deviation / sqrt(n)):
+
+   ==========================  ========  ===============================================================
+   name                        unit      per-stride statistic
+   ==========================  ========  ===============================================================
+   stance_gyro                 deg/s     mean |angular rate| over the middle third of the detected stance
+   stance_rate_x, _y, _z       deg/s     mean angular rate per sensor axis there (signed: a sustained
+                                         rotation of the standing foot shows here, a symmetric rocking not)
+   stance_acc_spread           m/s^2     rms deviation of the specific force from its mean there (3 axes)
+   stance_duration             s         detected stance length (at the detector's threshold)
+   stance_shoe                 log10     median log10 of the SHOE statistic inside the detected stance
+   acc_peak                    m/s^2     largest |specific force| of the stride
+   gyr_peak                    deg/s     largest |angular rate| of the stride
+   hf40, hf80                  %         share of the stride's |a| variance above 40 / 80 Hz (only when
+                                         the Nyquist frequency exceeds HF_NYQUIST_MARGIN times the edge)
+   onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
+                                         ONSET_WINDOW_S of the stance (impact ringing lives here)
+   acc_gyro_lag                ms        shift of the stride's cross-correlation curve of |a| with |dw/dt|
+                                         (band-passed, +-LAG_WINDOW_S) against the twin's mean curve; set by
+                                         residuals.compare (the twin's strides against their own mean give
+                                         its spread), so a pure relative delay of the gyro shows as its value
+   swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
+                                         momentum direction of the gyro, sign so that y > 0)
+   stance_velocity             m/s       forward velocity of the position track (reference or truth) over
+                                         the middle third of the stance; forward = this stride's direction
+   ==========================  ========  ===============================================================
+
+   plus ``rest_acc_norm`` (m/s^2, |mean specific force| over the first detected rest, uncertainty its sample
+   standard deviation / sqrt(samples)) and the phase profiles: each stride's six channels resampled onto
+   ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean and standard
+   error. Capitalised names are :mod:`gaitsim.loop.settings`.
+
+The residuals between two signatures are :mod:`gaitsim.loop.residuals`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nav import detectors
+from nav.constants import DEFAULT_GRAVITY
+from nav.series import resample
+
+from . import settings
+from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
+
+CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+PER_STRIDE = ("stance_gyro", "stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_acc_spread", "stance_duration",
+              "stance_shoe", "acc_peak", "gyr_peak", "hf40", "hf80", "onset_hf", "swing_axis_yaw")  # scalars per stride
+
+
+@dataclass
+class Scalar:
+    """A signature number: value, standard error and the per-stride samples it came from."""
+
+    value: float
+    se: float
+    samples: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+
+@dataclass
+class Profile:
+    """Per-phase mean (P,) and standard error (P,) of one channel; ``strides`` (n, P) the resampled strides."""
+
+    mean: np.ndarray
+    se: np.ndarray
+    strides: np.ndarray
+
+
+@dataclass
+class Signature:
+    """Stride-normalised summary of one recording (see the module docstring).
+
+    Attributes
+    ----------
+    scalars : name -> Scalar.
+    profiles : channel -> Profile (acc in m/s^2, gyr in deg/s).
+    strides : (n, 2) int, sample indices of each used stride's start and end.
+    stances : (n, 2) int, sample indices of each used stride's detected stance (start, end).
+    rate_hz : median sample rate.
+    spectrum : (frequencies Hz, mean power of |a| per stride, normalised to unit total) for figures.
+    lag_curves : (n, L) per-stride |a| x |dw/dt| cross-correlation curves (for ``acc_gyro_lag``).
+    stationary : (N,) bool, the SHOE detection the strides were cut from (the twin fit re-uses it).
+    gravity : m/s^2, the gravity that detection assumed (the recording's).
+    """
+
+    scalars: dict
+    profiles: dict
+    strides: np.ndarray
+    stances: np.ndarray
+    rate_hz: float
+    spectrum: tuple
+    lag_curves: np.ndarray
+    stationary: np.ndarray
+    gravity: float
+
+
+def mean_se(samples) -> Scalar:
+    x = np.asarray(samples, float)
+    x = x[np.isfinite(x)]
+    if len(x) == 0:
+        return Scalar(math.nan, math.nan, x)
+    se = float(np.std(x, ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan
+    return Scalar(float(np.mean(x)), se, x)
+
+
+def _band_share(x: np.ndarray, rate_hz: float, edge_hz: float) -> float:
+    """Share (%) of the variance of ``x`` above ``edge_hz``."""
+    power = np.abs(np.fft.rfft(x - x.mean())) ** 2
+    freq = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
+    total = power[1:].sum()
+    return float(100.0 * power[freq > edge_hz].sum() / total) if total > 0 else math.nan
+
+
+def _band_pass(x: np.ndarray, rate_hz: float, band: tuple = settings.LAG_BAND_HZ) -> np.ndarray:
+    """Zero-phase FFT band pass of ``x`` (band in Hz, upper edge at most ``settings.BAND_TOP_SHARE`` times the
+    rate), mean removed."""
+    spec = np.fft.rfft(x - x.mean())
+    freq = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
+    spec[(freq < band[0]) | (freq > min(band[1], settings.BAND_TOP_SHARE * rate_hz))] = 0.0
+    return np.fft.irfft(spec, len(x))
+
+
+def _xcorr_curve(gyr: np.ndarray, acc_norm: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Normalised cross-correlation of band-passed |a| with band-passed |dw/dt| at lags -L..L samples."""
+    a = _band_pass(acc_norm, rate_hz)
+    g = _band_pass(np.linalg.norm(np.gradient(gyr, axis=0), axis=1) * rate_hz, rate_hz)
+    max_lag = max(2, int(round(settings.LAG_WINDOW_S * rate_hz)))
+    n = len(a)
+    if n <= 2 * max_lag + 4:
+        return np.full(2 * max_lag + 1, math.nan)
+    corr = np.array([np.dot(a[max_lag:n - max_lag], g[max_lag + k:n - max_lag + k])
+                     for k in range(-max_lag, max_lag + 1)])
+    scale = np.linalg.norm(a) * np.linalg.norm(g)
+    return corr / scale if scale > 0 else corr
+
+
+def curve_shift_ms(curves: np.ndarray, template: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Shift (ms) of each curve (n, L) against ``template`` (L,) by least squares on an upsampled grid;
+    positive: the gyro feature comes later relative to the accelerometer feature than in the template."""
+    lags = np.arange(len(template)) - len(template) // 2
+    fine = np.linspace(lags[0], lags[-1], (len(lags) - 1) * settings.LAG_UPSAMPLE + 1)
+    inner = np.abs(fine) <= lags[-1] / 2
+    shifts = fine[inner]
+    tmpl = np.interp(fine, lags, template)
+    shifted = np.interp((fine[inner][None, :] - shifts[:, None]).ravel(), fine, tmpl).reshape(len(shifts), -1)
+    out = np.full(len(curves), math.nan)
+    for k, c in enumerate(curves):
+        if np.all(np.isfinite(c)):
+            cost = np.sum((np.interp(fine, lags, c)[inner][None, :] - shifted) ** 2, axis=1)
+            out[k] = shifts[int(np.argmin(cost))]
+    return 1000.0 * out / rate_hz
+
+
+def _swing_axis_yaw(gyr: np.ndarray) -> float:
+    """atan2(x, y) (deg) of the stride's dominant rotation axis."""
+    axis = dominant_axis(gyr)
+    return float(np.degrees(np.arctan2(axis[0], axis[1])))
+
+
+def _stance_velocity(t: np.ndarray, pos_t: np.ndarray, pos: np.ndarray, strides: np.ndarray,
+                     stances: np.ndarray) -> np.ndarray:
+    """Per stride, mean forward velocity (m/s) of a position track over the middle third of the stance."""
+    ok = np.all(np.isfinite(pos), axis=1)
+    if ok.sum() < settings.MIN_TRACK_SAMPLES:
+        return np.full(len(strides), math.nan)
+    pt, pp = pos_t[ok], pos[ok]
+    out = np.full(len(strides), math.nan)
+    for k, ((s0, s1), (c0, c1)) in enumerate(zip(strides, stances)):
+        t_mid = 0.5 * (t[c0] + t[c1 - 1])
+        t_next = t_mid + (t[s1] - t[s0])
+        if t_next > pt[-1] or t[c0] < pt[0]:
+            continue
+        here = resample(t_mid, pt, pp[:, :2])
+        there = resample(t_next, pt, pp[:, :2])
+        step = there - here
+        if np.hypot(*step) < settings.MIN_TRACK_STRIDE_M:
+            continue
+        forward = step / np.hypot(*step)
+        third = (t[c1 - 1] - t[c0]) / 3.0
+        ta, tb = t[c0] + third, t[c1 - 1] - third
+        if tb - ta <= 0:
+            continue
+        xa = resample(ta, pt, pp[:, :2])
+        xb = resample(tb, pt, pp[:, :2])
+        out[k] = float((xb - xa) @ forward / (tb - ta))
+    return out
+
+
+def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray | None = None,
+              pos: np.ndarray | None = None, gravity: float = DEFAULT_GRAVITY) -> Signature:
+    """Stride-normalised signature of one recording (module docstring).
+
+    Parameters
+    ----------
+    t : (N,) s.  acc : (N, 3) m/s^2 specific force.  gyr : (N, 3) rad/s.
+    pos_t, pos : optional position track (M,) s and (M, 3) m on the same clock (a reference or the truth);
+        needed for ``stance_velocity``.
+    gravity : m/s^2, for the SHOE detector.
+
+    Raises
+    ------
+    ValueError when fewer than 3 regular strides are found.
+    """
+    t = np.asarray(t, float)
+    acc = np.asarray(acc, float)
+    gyr = np.asarray(gyr, float)
+    rate = detectors.sample_rate(t)
+    result = detectors.detect("shoe", t, acc, gyr, gravity=gravity)
+    stances_all = stance_intervals(t, result.stationary)
+    strides, stances = regular_strides(t, gyr, stances_all)
+    if len(strides) < 3:
+        raise ValueError(f"signature: only {len(strides)} regular strides found (need 3); stance runs: "
+                         f"{len(stances_all)}")
+    acc_norm = np.linalg.norm(acc, axis=1)
+    log_stat = np.log10(np.maximum(result.statistic, 1e-12))
+    per = {k: [] for k in PER_STRIDE}
+    for stride, stance in zip(strides, stances):
+        for key, value in {**_stance_statistics(t, acc, gyr, log_stat, stance),
+                           **_stride_statistics(acc_norm, gyr, rate, stride)}.items():
+            per[key].append(value)
+    scalars = {k: mean_se(v) for k, v in per.items()}
+    if pos is not None and pos_t is not None:
+        scalars["stance_velocity"] = mean_se(_stance_velocity(t, np.asarray(pos_t, float), np.asarray(pos, float),
+                                                               strides, stances))
+    scalars["rest_acc_norm"] = _rest_acc_norm(acc[stances_all[0][0]:stances_all[0][1]])
+    curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
+    return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
+                     _spectrum(acc_norm, strides, rate), curves, result.stationary, float(gravity))
+
+
+def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat: np.ndarray,
+                       stance: np.ndarray) -> dict:
+    """The stance statistics of one stride (module docstring) over its detected stance [c0, c1)."""
+    c0, c1 = stance
+    third = (c1 - c0) // 3
+    core = slice(c0 + third, c1 - third) if c1 - c0 >= 6 else slice(c0, c1)
+    rates = np.degrees(gyr[core].mean(0))
+    inside = log_stat[c0:min(c1, len(log_stat))]
+    return {"stance_gyro": np.degrees(np.linalg.norm(gyr[core], axis=1).mean()),
+            "stance_rate_x": rates[0], "stance_rate_y": rates[1], "stance_rate_z": rates[2],
+            "stance_acc_spread": float(np.sqrt(np.mean(np.sum((acc[core] - acc[core].mean(0)) ** 2, 1)))),
+            "stance_duration": t[c1 - 1] - t[c0],
+            "stance_shoe": float(np.median(inside)) if inside.size else math.nan}
+
+
+def _stride_statistics(acc_norm: np.ndarray, gyr: np.ndarray, rate: float, stride: np.ndarray) -> dict:
+    """The whole-stride statistics of one stride [s0, s1) (module docstring); the high-frequency ones only where
+    the sample rate resolves their band."""
+    s0, s1 = stride
+    a = acc_norm[s0:s1]
+    out = {"acc_peak": a.max(), "gyr_peak": np.degrees(np.linalg.norm(gyr[s0:s1], axis=1).max())}
+    for edge, key in zip(settings.HF_EDGES_HZ, ("hf40", "hf80")):
+        out[key] = _band_share(a, rate, edge) if rate / 2 > settings.HF_NYQUIST_MARGIN * edge else math.nan
+    if rate / 2 > settings.HF_NYQUIST_MARGIN * settings.ONSET_HF_EDGE_HZ:
+        high = _band_pass(a, rate, (settings.ONSET_HF_EDGE_HZ, np.inf))
+        out["onset_hf"] = float(np.sqrt(np.mean(high[:max(2, int(settings.ONSET_WINDOW_S * rate))] ** 2)))
+    out["swing_axis_yaw"] = _swing_axis_yaw(gyr[s0:s1])
+    return out
+
+
+def _rest_acc_norm(rest_acc: np.ndarray) -> Scalar:
+    """|mean specific force| (m/s^2) over the first detected rest; its uncertainty the samples' spread (at least
+    ``settings.REST_ACC_NORM_SD_FLOOR``) / sqrt(samples)."""
+    norm_samples = np.linalg.norm(rest_acc, axis=1)
+    spread = max(norm_samples.std(ddof=1), settings.REST_ACC_NORM_SD_FLOOR)
+    return Scalar(float(np.linalg.norm(rest_acc.mean(0))), float(spread / math.sqrt(len(rest_acc))), norm_samples)
+
+
+def _profiles(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, strides: np.ndarray) -> dict:
+    """Channel -> :class:`Profile` of the six channels (acc m/s^2, gyr deg/s) on the stride phase grid."""
+    resampled = phase_resample(t, np.column_stack([acc, np.degrees(gyr)]), strides)  # (S, P, 6), CHANNELS order
+    profiles = {}
+    for i, c in enumerate(CHANNELS):
+        x = resampled[:, :, i]
+        profiles[c] = Profile(x.mean(0), x.std(0, ddof=1) / math.sqrt(len(x)), x)
+    return profiles
+
+
+def _spectrum(acc_norm: np.ndarray, strides: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """(frequencies Hz, mean over strides of the |a| power spectrum, each stride's normalised to unit total)."""
+    n_fft = int(2 ** np.ceil(np.log2(np.median(strides[:, 1] - strides[:, 0]))))
+    spectra = []
+    for s0, s1 in strides:
+        seg = acc_norm[s0:s1] - acc_norm[s0:s1].mean()
+        spec = np.abs(np.fft.rfft(seg, n_fft)) ** 2
+        spectra.append(spec / max(spec[1:].sum(), 1e-30))
+    return np.fft.rfftfreq(n_fft, 1.0 / rate), np.mean(spectra, axis=0)

@@ -1,0 +1,80 @@
+"""Strides of a foot-IMU recording from its IMU alone, and signals resampled on their gait phase.
+
+Stance is detected with SHOE (:mod:`nav.detectors`); runs of stance closer than ``settings.MERGE_GAP_S`` are
+merged. A stride runs from one stance onset to the next, the onset being where the angular rate last fell below
+``settings.QUIET_RATE_DPS`` before the stance centre (a gyro-only event, so accelerometer-side effects that move
+the SHOE onset do not shift the phase grid); strides whose period is not within ``settings.STRIDE_PERIOD_BAND``
+times the median (rest at the ends, missed stances) are dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nav.alignment import stationary_runs
+from nav.series import resample
+
+from . import settings
+
+
+def stance_intervals(t: np.ndarray, stationary: np.ndarray) -> np.ndarray:
+    """(m, 2) sample indices [start, end) of detected stances after merging gaps < ``settings.MERGE_GAP_S`` and
+    dropping runs shorter than ``settings.MIN_STANCE_S``; ``t`` in s."""
+    starts, ends = stationary_runs(stationary)
+    if len(starts) == 0:
+        return np.empty((0, 2), int)
+    merged = [[starts[0], ends[0]]]
+    for s, e in zip(starts[1:], ends[1:]):
+        if t[s] - t[merged[-1][1] - 1] < settings.MERGE_GAP_S:
+            merged[-1][1] = e
+        else:
+            merged.append([s, e])
+    out = np.array(merged, int)
+    keep = t[out[:, 1] - 1] - t[out[:, 0]] >= settings.MIN_STANCE_S
+    return out[keep]
+
+
+def gyro_onsets(gyr: np.ndarray, stances: np.ndarray) -> np.ndarray:
+    """Sample index where |w| last rose above ``settings.QUIET_RATE_DPS`` before each stance's centre, plus one."""
+    loud = np.degrees(np.linalg.norm(gyr, axis=1)) >= settings.QUIET_RATE_DPS
+    loud_index = np.flatnonzero(loud)
+    centres = (stances[:, 0] + stances[:, 1]) // 2
+    before = np.searchsorted(loud_index, centres) - 1
+    return np.where(before >= 0, loud_index[np.maximum(before, 0)] + 1, stances[:, 0])
+
+
+def regular_strides(t: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Stride [start, end) sample indices (gyro onset to next onset) and their stances, regular ones only."""
+    if len(stances) < 2:
+        return np.empty((0, 2), int), np.empty((0, 2), int)
+    onsets = gyro_onsets(gyr, stances)
+    periods = t[onsets[1:]] - t[onsets[:-1]]
+    usable = periods < settings.MAX_STRIDE_S
+    if not usable.any():
+        return np.empty((0, 2), int), np.empty((0, 2), int)
+    median = np.median(periods[usable])
+    low, high = settings.STRIDE_PERIOD_BAND
+    keep = usable & (periods > low * median) & (periods < high * median)
+    # a stance that lasts longer than the stride's own period is rest, not gait
+    keep &= (t[stances[:-1, 1] - 1] - t[onsets[:-1]]) < settings.REST_STANCE_SHARE * periods
+    strides = np.column_stack([onsets[:-1], onsets[1:]])[keep]
+    return strides, stances[:-1][keep]
+
+
+def phase_resample(t: np.ndarray, x: np.ndarray, strides: np.ndarray, points: int = settings.PHASE_POINTS) -> np.ndarray:
+    """(S, P, ...) the signal ``x`` (N, ...) resampled linearly on ``points`` equal phases of each stride
+    [s0, s1] (sample indices; phase 0 at s0, the last phase one step before s1)."""
+    phase = np.linspace(0.0, 1.0, points, endpoint=False)
+    x = np.asarray(x, float)
+    flat = x.reshape(len(x), -1)
+    out = []
+    for s0, s1 in strides:
+        grid = t[s0] + phase * (t[s1] - t[s0])
+        out.append(resample(grid, t[s0:s1 + 1], flat[s0:s1 + 1]))
+    return np.array(out).reshape((len(strides), points) + x.shape[1:])
+
+
+def dominant_axis(gyr: np.ndarray) -> np.ndarray:
+    """Unit principal axis of the angular rate (N, 3) over a stride, signed so that its y component is >= 0."""
+    _, vectors = np.linalg.eigh(gyr.T @ gyr)
+    return vectors[:, -1] * (1.0 if vectors[1, -1] >= 0 else -1.0)

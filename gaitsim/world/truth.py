@@ -1,0 +1,62 @@
+"""Ground truth of a walk: plan the stances, build the C4 joint trajectories, sample MuJoCo's IMU-site sensors.
+
+The world knows nothing of sensors or scenario files: :mod:`gaitsim.simulate` turns a scenario into the inputs
+of :func:`simulate_truth` and puts the sensor model on its output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nav import quaternion as quat
+from nav.recording import Events, Truth
+
+from .foot import FootModel, Mount
+from .gait import StancePlan, Walk, plan_stances
+from .profile import FootTrajectory
+
+
+def increments(t: np.ndarray, vel: np.ndarray, q: np.ndarray, gravity: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact (sculling- and coning-exact) increments over [t_k, t_k+1]; the last row is zero.
+
+    Returns
+    -------
+    dv : (N, 3) m/s, ``C_k^T (v_{k+1} - v_k - g dt)`` with g = (0, 0, -gravity).
+    dth : (N, 3) rad, rotation vector of ``q_k^* ⊗ q_{k+1}``.
+    """
+    dt = np.diff(t)[:, None]
+    g = np.array([0.0, 0.0, -gravity])
+    dv = np.zeros_like(vel)
+    dth = np.zeros_like(vel)
+    dv[:-1] = quat.rotate(quat.conjugate(q[:-1]), vel[1:] - vel[:-1] - g * dt)
+    dth[:-1] = quat.to_rotvec(quat.multiply(quat.conjugate(q[:-1]), q[1:]))
+    return dv, dth
+
+
+def stance_labels(t: np.ndarray, plan: StancePlan) -> np.ndarray:
+    """True where ``t_ff <= t < t_ho`` of some stance (the last stance includes its end)."""
+    idx = np.searchsorted(plan.t_ff, t, side="right") - 1
+    ok = idx >= 0
+    inside = np.zeros(t.size, bool)
+    inside[ok] = t[ok] < plan.t_ho[idx[ok]]
+    inside[t >= plan.t_ff[-1]] = True
+    return inside
+
+
+def simulate_truth(walk: Walk, mount: Mount, rate_hz: float, gravity: float,
+                   gait_rng: np.random.Generator) -> tuple[Truth, Events]:
+    """Truth and events of one walk sampled at ``rate_hz`` (Hz) under ``gravity`` (m/s^2), the IMU at ``mount``
+    (its stride variability drawn from ``gait_rng``)."""
+    foot = FootModel(mount, gravity)
+    plan = plan_stances(walk, gait_rng)
+    traj = FootTrajectory(walk, plan, foot.toe_length)
+    n = int(np.floor(plan.t_end * rate_hz + 1e-9)) + 1
+    t = np.arange(n) / rate_hz
+    joints = traj.joints(t)
+    s = foot.sample(joints[:, 0].T, joints[:, 1].T, joints[:, 2].T)
+    dv, dth = increments(t, s.vel, s.quat, gravity)
+    truth = Truth(t=t, pos=s.pos, vel=s.vel, quat=s.quat, gyr=s.gyr, acc=s.acc, dv=dv, dth=dth,
+                  stance=stance_labels(t, plan))
+    events = Events(t_ic=plan.t_ic, t_ff=plan.t_ff, t_ho=plan.t_ho, t_to=plan.t_to,
+                    stance_displacement=traj.stance_displacement(foot.lever_arm))
+    return truth, events
