@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 
 from nav import metrics
+from nav.adaptive_detector import AdaptiveThreshold
 from nav.detectors import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW, DETECTORS
 from nav.ekf import STATE_SIZES, FilterConfig
 from nav.pipeline import ALL_CALIBRATION_TERMS, METHODS, NavOptions, navigate, navigate_batch, score_solution
@@ -18,6 +19,7 @@ from nav.recording import atomic_output_dir, list_runs, read_recording
 from nav.solution import write_json, write_solution_into
 
 _DEFAULT_FILTER = FilterConfig()
+_DEFAULT_ADAPTIVE = AdaptiveThreshold()
 
 
 def add_parser(subparsers) -> None:
@@ -34,6 +36,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("--sigma-g", type=float, default=math.degrees(DEFAULT_SIGMA_G),
                    help="detector gyro sigma, deg/s (default 0.1; converted to rad/s)")
     p.add_argument("--window", type=int, default=DEFAULT_WINDOW, help="detector window, samples (default 3)")
+    p.add_argument("--adaptive-ratio", type=float, default=_DEFAULT_ADAPTIVE.ratio,
+                   help="adaptive detector: threshold = max(--threshold, ratio x the span's peak gyro energy in "
+                        f"sigma_g^2), dimensionless (default {_DEFAULT_ADAPTIVE.ratio:g}; 0: fixed threshold)")
+    p.add_argument("--adaptive-span", type=float, default=_DEFAULT_ADAPTIVE.span_s,
+                   help=f"adaptive detector: centred span the peak is taken over, s (default {_DEFAULT_ADAPTIVE.span_s:g})")
+    p.add_argument("--adaptive-window", type=float, default=_DEFAULT_ADAPTIVE.window_s,
+                   help=f"adaptive detector: window duration, s (default {_DEFAULT_ADAPTIVE.window_s:g}; replaces --window)")
     p.add_argument("--states", type=int, choices=STATE_SIZES, default=_DEFAULT_FILTER.states,
                    help="EKF size: 9 (pos, vel, att), 15 (+biases), 24 (+gyro g-sensitivity)")
     p.add_argument("--zupt-sigma", type=float, default=_DEFAULT_FILTER.zupt_sigma,
@@ -60,7 +69,8 @@ def options_from_args(args) -> NavOptions:
     terms = tuple(x.strip() for x in args.calibration_terms.split(",") if x.strip())
     return NavOptions(
         detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g),
-        window=args.window, filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
+        window=args.window,
+        adaptive=AdaptiveThreshold(args.adaptive_ratio, args.adaptive_span, args.adaptive_window), filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,
         heading=None if args.heading_deg is None else math.radians(args.heading_deg), gravity=args.gravity,
     )
