@@ -20,6 +20,7 @@ import numpy as np
 
 from . import detectors, metrics
 from . import quaternion as quat
+from .adaptive_detector import AdaptiveThreshold, detect_adaptive
 from .alignment import DEFAULT_MIN_SAMPLES, align, first_leg_direction, yaw_of
 from .calibration import TERM_GROUPS, load_calibration
 from .checks import check_recording, check_stance_found
@@ -49,9 +50,12 @@ class NavOptions:
 
     Attributes
     ----------
-    detector : "shoe", "are", "mv", "mag" or "oracle" (the recording's true stance labels).
-    threshold : detector threshold gamma (dimensionless). Default 3e4 (OpenShoe).
-    sigma_a : m/s^2, sigma_g : rad/s, window : samples -- detector parameters (OpenShoe: 0.01, 0.1 deg/s, 3).
+    detector : "shoe", "are", "mv", "mag", "adaptive" (SHOE with a threshold that follows the gait,
+        nav.adaptive_detector) or "oracle" (the recording's true stance labels).
+    threshold : detector threshold gamma (dimensionless); the floor gamma_0 for "adaptive". Default 3e4 (OpenShoe).
+    sigma_a : m/s^2, sigma_g : rad/s, window : samples -- detector parameters (OpenShoe: 0.01, 0.1 deg/s, 3);
+        "adaptive" takes its window from ``adaptive.window_s`` instead.
+    adaptive : AdaptiveThreshold, ratio, span (s) and window (s) of the "adaptive" detector.
     filter : FilterConfig (states, noise densities, ZUPT noise, ...).
     method : "auto" (exact increments when the recording's IMU is its exact truth and no calibration is
         applied, else "rk4"), "rk4" or "increments".
@@ -70,6 +74,7 @@ class NavOptions:
     sigma_a: float = DEFAULT_SIGMA_A
     sigma_g: float = DEFAULT_SIGMA_G
     window: int = DEFAULT_WINDOW
+    adaptive: AdaptiveThreshold = field(default_factory=AdaptiveThreshold)
     filter: FilterConfig = field(default_factory=FilterConfig)
     method: str = "auto"
     calibration: object = None
@@ -139,6 +144,9 @@ def _detect(rec: Recording, acc: np.ndarray, gyr: np.ndarray, options: NavOption
         if rec.truth is None:
             raise RecordingError("detector 'oracle' needs the recording's truth (truth.csv with a stance column)")
         return detectors.oracle(rec.t, rec.truth.stance)
+    if options.detector == "adaptive":
+        return detect_adaptive(rec.t, acc, gyr, options.threshold, options.sigma_a, options.sigma_g, options.adaptive,
+                               gravity)
     return detectors.detect(options.detector, rec.t, acc, gyr, options.threshold, options.sigma_a, options.sigma_g,
                             options.window, gravity)
 
