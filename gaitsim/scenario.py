@@ -69,6 +69,7 @@ WRITTEN_DIGITS = 15  # significant digits of a converted value written back (the
 
 MAX_SWING_SPEED = 10.0  # m/s, mean foot speed over the swing (stride / swing time); sprinting feet reach ~2x this at peak
 MAX_STRIDE_SD_SHARE = 0.25  # stride-to-stride spread of the stride length, share of the stride (4 sd stay > 0)
+RADIUS_ROUNDING = 1e-9  # relative: a radius of exactly one step survives the rounding of a path's geometry
 MAX_SAMPLES = 5_000_000  # samples of one run (~1.7 h at 800 Hz; ~0.7 kB of memory per sample while simulating)
 MAX_JITTER_SHARE = 0.1  # timestamp jitter std, share of the sample period (10 sd apart: timestamps never reorder)
 MAX_SKEW_S = 0.05  # s, accelerometer-gyro skew (the skewed channel loses this much data at each end)
@@ -268,7 +269,7 @@ def build_path(table: dict, gait: GaitParams, where: str):
         if key not in PATH_KEYS[kind]:
             raise ScenarioError(f"{where}: unknown key {key!r} for kind {kind!r}; allowed: {', '.join(sorted(PATH_KEYS[kind]))}")
     num = lambda key, default=None: _checked(where, "path", key, table.get(key, default), 0.0)  # noqa: E731
-    step = gait.stride_length_m / 2
+    step = gait.stride_length_m / 2 * (1 - RADIUS_ROUNDING)
     if kind == "static":
         _require("duration_s" in table, where, "duration_s", None, "required for kind 'static'")
         d = num("duration_s")
@@ -433,7 +434,7 @@ def with_changes(scenario: Scenario, changes: dict, source: str = "<changes>") -
     written = frozenset(key for section in changes.values() if isinstance(section, dict) for key in section)
     validate_gait(gait, impact, micro, source, written)
     if walk.path is not None:
-        step = gait.stride_length_m / 2
+        step = gait.stride_length_m / 2 * (1 - RADIUS_ROUNDING)
         _require(walk.path.min_radius >= step, f"{source} [path]", "turn radius", walk.path.min_radius,
                  f"a turn radius must be at least one step ({step} m)")
         _require(walk.path.length >= gait.stride_length_m, f"{source} [path]", "length", walk.path.length,
