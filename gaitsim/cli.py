@@ -11,6 +11,7 @@ from nav import command as nav_command
 from .experiments import command as experiments_command
 from .experiments.runner import RunsFailedError
 from .loop import command as loop_command
+from .ranges import check_value
 from .scenario import load_scenario
 from .simulate import generate, summary
 
@@ -20,6 +21,10 @@ SUBCOMMANDS = (nav_command, experiments_command, loop_command)
 
 def _generate(args) -> int:
     scenario = load_scenario(args.scenario)
+    if args.seed is not None:
+        check_value("scenario", "seed", args.seed, "gaitsim generate --seed")
+    if args.runs is not None:
+        check_value("scenario", "runs", args.runs, "gaitsim generate --runs")
     recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force)
     print(summary(recs[0]))
     if len(recs) > 1:

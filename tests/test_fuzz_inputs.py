@@ -41,7 +41,7 @@ HOSTILE = [math.nan, math.inf, -math.inf, 0.0, -1.0, 1e-30, 1e30, -1e30, 2**70, 
            [1.0, 2.0], [1e30, 0.0, 0.0]]
 WORLD_KEYS = [(section, key) for section in ("path", "gait", "impact", "micromotion", "mount", "sampling")
               for key in RANGES[section]]
-SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 def _doc(section: str, key: str, value) -> dict:
@@ -279,7 +279,7 @@ def test_an_edited_csv_wins_over_its_stale_binary_twin(clean, tmp_path):
     assert np.allclose(edited.gyr, np.degrees(rec.gyr))
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.sampled_from(["imu.csv", "truth.csv", "reference.csv", "events.csv"]), st.integers(1, 400),
        st.integers(0, 23), st.sampled_from(["nan", "inf", "x", "", "1e999", "--", "0x10", " "]))
 def test_any_corrupted_cell_is_refused_with_file_line_and_column_or_read(clean, tmp_path_factory, name, line, column,
