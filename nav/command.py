@@ -13,12 +13,13 @@ from pathlib import Path
 from . import metrics
 from .adaptive_detector import AdaptiveThreshold
 from .calibration import TERM_GROUPS
+from .checks import ALLOWABLE
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .detectors import DETECTORS
 from .ekf import STATE_SIZES, FilterConfig
 from .files import atomic_output_dir, write_json
 from .pipeline import METHODS, NavOptions, navigate, score_solution
-from .recording import list_runs, read_recording
+from .recording import TIME_UNITS, list_runs, read_recording
 from .solution import write_solution_into
 
 _DEFAULT_FILTER = FilterConfig()
@@ -63,6 +64,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("--stance-velocity", default=None,
                    help="stance velocity model JSON (step 2; default zero velocity)")
     p.add_argument("--rts", action="store_true", help="RTS-smooth the solution")
+    p.add_argument("--time-unit", choices=TIME_UNITS, default="s",
+                   help="unit of the recording's time columns (default s; the input check refuses a sample rate "
+                        "outside 20 Hz..5 kHz and says when the time looks like ms or us)")
+    p.add_argument("--allow", action="append", choices=ALLOWABLE, default=[],
+                   help="turn the refusal of one input check into a warning (repeatable): rate (sample rate "
+                        "outside 20 Hz..5 kHz), units (accelerometer in g, gyro above any walking rate), closure "
+                        "(gyro against accelerometer over the strides)")
     p.set_defaults(func=run)
 
 
@@ -76,6 +84,7 @@ def options_from_args(args) -> NavOptions:
         filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,
         heading=None if args.heading_deg is None else math.radians(args.heading_deg), gravity=args.gravity,
+        allow=tuple(args.allow),
     )
 
 
@@ -90,7 +99,7 @@ def run(args) -> int:
     """Execute ``gaitsim nav``; returns the exit code."""
     options = options_from_args(args)
     folders = list_runs(args.recording)
-    recs = [read_recording(f) for f in folders]
+    recs = [read_recording(f, time_unit=args.time_unit) for f in folders]
     solutions = navigate(recs, options)
     scores = [score_solution(r, s) for r, s in zip(recs, solutions)]
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
