@@ -18,6 +18,10 @@ REST_STANCE_SHARE = 0.8  # 1, a stance lasting longer than this share of its str
 QUIET_RATE_DPS = 40.0  # deg/s, a stride's phase origin is where |w| last fell below this before mid-stance
 PHASE_POINTS = 64  # points of the normalised gait phase the profiles are resampled on
 
+# -- sensor frame (gaitsim.loop.frame) ----------------------------------------------------------------------
+MIRROR_CLOSURE_RATIO = 3.0  # 1, the data are mirrored when mirroring them back closes the strides this much better
+MIN_FRAME_STRIDES = 3  # strides between detected stances needed to check the frame
+
 # -- signature (gaitsim.loop.signature) ----------------------------------------------------------------------
 HF_EDGES_HZ = (40.0, 80.0)  # Hz, band edges of the hf40 / hf80 shares of |a| variance
 HF_NYQUIST_MARGIN = 1.25  # 1, a band share is computed only when the Nyquist frequency exceeds edge x this
@@ -41,6 +45,7 @@ FIT_ITERATIONS = 2  # rounds of cadence and clearance matching by simulation
 PATH_TOLERANCE_M = 0.3  # m, Ramer-Douglas-Peucker tolerance of the twin's path through the stance centres
 HAIRPIN_TURN = math.radians(120.0)  # rad, a sharper corner of the path is walked as a hairpin
 CORNER_RADII_M = (1.0, 0.75, 0.5)  # m, corner radii tried in turn (then half a stride) for the twin's polyline
+RADIUS_MARGIN_M = 0.001  # m, added to the half-stride corner radius (the scenario requires at least one step)
 STRAIGHT_MIN_SPAN_M = 0.5  # m, a straight twin walks toward the track's end only when that end is this far away
 DEFAULT_STRIDE_LENGTH_M = 1.4  # m, the twin's stride length when the track gives no stance-to-stance step
 MAX_CYCLE_SD_FRAC = 0.1  # 1, largest stride-to-stride spread of the cycle time the twin is given
@@ -85,9 +90,8 @@ CLIP_BAND = 0.01  # 1, a clipped sample lies within this share of the recording'
 MIN_CLIPPED_RUNS = 2  # runs of >= 2 consecutive such samples needed before saturation is tried
 
 # -- attribution (gaitsim.loop.attribution) ------------------------------------------------------------------
-NAV_REPEATS = 3  # re-simulations with other seeds that give the spread of the twin's navigation metrics
-TWIN_OF_TWIN_SEED = 100  # seed offset of the twin's own recordings used to measure the fit floor
-TWIN_OF_TWIN_REPEATS = 2  # twin-of-twin pairs behind the fit floor
+NAV_REPEATS = 3  # re-simulations of the twin with other seeds; their pairs calibrate the comparison noise
+TWIN_OF_TWIN_SEED = 100  # seed offset of those re-simulations
 NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_error": 0.05}  # 1, deg/s, m
 EXPLAINED_FRACTION = 0.5  # 1, least share of the acted residual an accepted effect explains
 DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
