@@ -26,9 +26,10 @@
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
 5. the effect explaining the most is added to the twin when it explains at least ``settings.EXPLAINED_FRACTION``,
-   lowers Q, and does no harm: no other residual, navigation included, may grow by more than
-   ``settings.NOISE_LEVEL`` in z to above it (an effect that trades one residual for another is not what the recording
-   shows). An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
+   lowers Q, and does no harm: no other residual, navigation included, that was at the noise level may end
+   beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
+   recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
+   at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
    Steps 4-5 repeat for at most ``settings.MAX_ROUNDS`` residuals.
@@ -215,8 +216,8 @@ def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, mea
 def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
                    ctx: dict, noise: dict) -> Fit:
     """One magnitude search of ``effect`` in context ``ctx``: grid, then bounded Brent around the best point."""
-    use_nav = any(name.startswith("nav_") for name in effect.moves)
-    names = [n for n in base if n in effect.moves]
+    use_nav = all(name.startswith("nav_") for name in effect.moves)  # navigated only when that is all it moves
+    names = [n for n in base if n in effect.moves and (use_nav or not n.startswith("nav_"))]
     low, high = effect.search_bounds(ctx)
     cache = {}
 
@@ -255,12 +256,14 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
 
 
 def judged(fit: Fit, base: dict, acted: str) -> Fit:
-    """``fit`` with the fraction of ``acted`` it explains and the other residuals it makes worse."""
+    """``fit`` with the fraction of ``acted`` it explains and the other residuals it makes worse: at the noise
+    level before, beyond ``settings.HARM_FACTOR`` times it after (a residual that was already off may move
+    either way while another effect remains to be found)."""
     res = fit.residuals
     before, after = abs(base[acted].value), abs(res[acted].value) if acted in res else math.inf
     fraction = 1.0 - after / before if before > 0 else 0.0
     harmed = tuple(n for n in res if n != acted and n in base
-                   and res[n].z > settings.NOISE_LEVEL and res[n].z > base[n].z + settings.NOISE_LEVEL)
+                   and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed)
 
 

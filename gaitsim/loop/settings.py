@@ -32,6 +32,7 @@ ONSET_HF_EDGE_HZ = 30.0  # Hz, high-pass edge of |a| for onset_hf
 ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is taken
 BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate
 REST_ACC_NORM_SD_FLOOR = 1e-4  # m/s^2, least sample spread of |f| at rest (a quantised sensor can read one value)
+QUIET_REST_S = 1.0  # s, least length of the first and last rest compared by rest_gyro_change / rest_acc_change
 MIN_TRACK_SAMPLES = 10  # finite position-track samples needed for stance_velocity
 MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives no forward direction (no stance_velocity)
 
@@ -93,11 +94,12 @@ MIN_CLIPPED_RUNS = 2  # runs of >= 2 consecutive such samples needed before satu
 NAV_REPEATS = 3  # re-simulations of the twin with other seeds; their pairs calibrate the comparison noise
 TWIN_OF_TWIN_SEED = 100  # seed offset of those re-simulations
 NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_error": 0.05}  # 1, deg/s, m
+HARM_FACTOR = 2.0  # 1, an effect harms a residual at the noise level that it pushes beyond this x NOISE_LEVEL
 EXPLAINED_FRACTION = 0.5  # 1, least share of the acted residual an accepted effect explains
 DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
 MAX_ROUNDS = 20  # residuals acted on per recording at most
-GRID_POINTS = 9  # grid of each effect's magnitude search before the Brent refinement
-BRENT_ITERATIONS = 12  # iterations of the bounded Brent refinement
+GRID_POINTS = 7  # grid of each effect's magnitude search before the Brent refinement
+BRENT_ITERATIONS = 8  # iterations of the bounded Brent refinement
 BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its bracket
 
 # -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
@@ -105,3 +107,5 @@ BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case
 BLIND_RATE_HZ = 200.0  # Hz, its IMU rate
 BLIND_REFERENCE_RATE_HZ = 100.0  # Hz, its position reference (like a motion tracker)
 BLIND_SEED = 11  # seed of the blind recordings
+BLIND_ROUNDS = 4  # loop rounds on each blind recording
+BLIND_MAGNITUDE_TOLERANCE = 0.25  # 1, a blind effect is found when its magnitude is within this share of the truth
