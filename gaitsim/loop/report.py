@@ -23,6 +23,7 @@ from nav.files import jsonable, write_json  # noqa: E402
 from ..numbers import shown  # noqa: E402
 from . import attribution as att  # noqa: E402
 from . import settings  # noqa: E402
+from .residuals import profile_fit  # noqa: E402
 from .twin_file import write_twin_toml  # noqa: E402
 from .signature import CHANNELS  # noqa: E402
 
@@ -43,6 +44,8 @@ def attribution_document(result: att.LoopResult, label: str) -> dict:
         "residuals_before": {k: r.as_dict() for k, r in result.residuals_before.items()},
         "residuals_after": {k: r.as_dict() for k, r in result.residuals_after.items()},
         "effect_context": result.context,
+        "profile_fit_before": profile_fit(result.measured.signature, result.before.signature),
+        "profile_fit_after": profile_fit(result.measured.signature, result.after.signature),
         "twin_before": {"scenario": result.twin_before.document(), "fit_notes": result.twin_before.notes},
         "twin_after": {"scenario": result.twin_after.document()},
     })
@@ -127,6 +130,12 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
     for key, v in result.navigation_summary().items():
         lines.append(f"| {key} ({v['unit']}) | {shown(v['measured'])} | {shown(v['twin_before'])} | "
                      f"{shown(v['twin_after'])} | {shown(v['discrepancy_before'])} | {shown(v['discrepancy_after'])} |")
+    lines += ["", f"## Phase profiles: twin within {settings.PROFILE_SPREAD_FACTOR:g}x the recording's "
+              "stride-to-stride spread?", "", "| channel | share of phases within | largest ratio | phases beyond (% of "
+              "stride) |", "|---|---|---|---|"]
+    for channel, fit in profile_fit(result.measured.signature, result.after.signature).items():
+        runs = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in fit["phases_beyond_pct"]) or "none"
+        lines.append(f"| {channel} | {fit['within_share']:.0%} | {fit['largest_ratio']:.3g} | {runs} |")
     lines += ["", "## All residuals", "", "| residual | unit | recording | twin before | residual before | z before "
               "| twin after | residual after | z after |", "|---|---|---|---|---|---|---|---|---|"]
     for key in sorted(result.residuals_before, key=lambda k: -np.nan_to_num(result.residuals_before[k].z)):

@@ -91,3 +91,20 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         out[name] = Residual(name, UNITS[name], float(np.sqrt(np.mean(m.mean**2))), float(np.sqrt(np.mean(w.mean**2))),
                              rms, uncertainty(name, float(np.sqrt(np.mean(m.se**2 + w.se**2)))))
     return out
+
+
+def profile_fit(measured: Signature, twin: Signature, factor: float = settings.PROFILE_SPREAD_FACTOR) -> dict:
+    """Per channel, how far the twin's phase profile is from the recording's, in units of the recording's
+    stride-to-stride standard deviation (not its standard error): the phases (% of the stride from the stance
+    onset) where the twin's mean lies beyond ``factor`` of them, grouped into runs, and the largest ratio."""
+    out = {}
+    for c in CHANNELS:
+        m, w = measured.profiles[c], twin.profiles[c]
+        spread = np.maximum(m.strides.std(0, ddof=1), 1e-9)
+        ratio = np.abs(m.mean - w.mean) / spread
+        phase = 100.0 * np.arange(len(ratio)) / len(ratio)
+        beyond = np.flatnonzero(ratio > factor)
+        runs = np.split(beyond, np.flatnonzero(np.diff(beyond) > 1) + 1) if beyond.size else []
+        out[c] = {"largest_ratio": float(ratio.max()), "within_share": float(np.mean(ratio <= factor)),
+                  "phases_beyond_pct": [[float(phase[r[0]]), float(phase[r[-1]])] for r in runs]}
+    return out

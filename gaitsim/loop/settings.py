@@ -38,6 +38,7 @@ MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives n
 
 # -- residuals (gaitsim.loop.residuals) ----------------------------------------------------------------------
 NOISE_LEVEL = 3.0  # 1, a residual with |value| <= NOISE_LEVEL x uncertainty is at the noise level
+PROFILE_SPREAD_FACTOR = 2.0  # 1, the twin's profile should lie within this x the recording's stride-to-stride sd
 UNCERTAINTY_FLOOR = {"stance_velocity": 0.0005, "swing_axis_yaw": 0.05}  # m/s, deg: reference / axis resolution
 
 # -- twin fit (gaitsim.loop.twin) ----------------------------------------------------------------------------
@@ -97,7 +98,7 @@ NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_er
 HARM_FACTOR = 2.0  # 1, an effect harms a residual at the noise level that it pushes beyond this x NOISE_LEVEL
 EXPLAINED_FRACTION = 0.5  # 1, least share of the acted residual an accepted effect explains
 DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
-MAX_ROUNDS = 20  # residuals acted on per recording at most
+MAX_ROUNDS = 6  # residuals acted on per recording at most
 GRID_POINTS = 7  # grid of each effect's magnitude search before the Brent refinement
 BRENT_ITERATIONS = 8  # iterations of the bounded Brent refinement
 BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its bracket
