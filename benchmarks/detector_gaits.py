@@ -69,8 +69,7 @@ def running_timing_doc(doc: dict, cadence: float, sensor: str, stance_roll_dps: 
               "pitch_rate_toe_off_dps": 500.0, "pitch_rate_heel_strike_dps": 150.0, "swing_height_m": 0.15},
         impact={"heel_strike_velocity_mps": [0.5, 0.0, -0.6], "heel_strike_duration_s": 0.015,
                 "slap_rate_dps": 250.0, "slap_duration_s": 0.03},
-        micromotion={"stance_roll_rate_dps": stance_roll_dps, "creep_ramp_s": 0.02, "settle_duration_s": 0.04,
-                     "heel_off_duration_s": 0.06},
+        micromotion={"stance_roll_rate_dps": stance_roll_dps, "creep_ramp_s": 0.02, "loading_duration_s": 0.04},
     )
     return out
 

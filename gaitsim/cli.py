@@ -1,4 +1,4 @@
-"""Command line: ``gaitsim generate | nav | run | reproduce | loop``. A thin layer over the Python API."""
+"""Command line: ``gaitsim generate | nav | run | reproduce | loop | stance``. A thin layer over the Python API."""
 
 from __future__ import annotations
 
@@ -14,9 +14,10 @@ from .loop import command as loop_command
 from .ranges import check_value
 from .scenario import load_scenario
 from .simulate import generate, summary
+from .stance import command as stance_command
 
 # subcommands living in their own modules; each exposes add_parser(subparsers)
-SUBCOMMANDS = (nav_command, experiments_command, loop_command)
+SUBCOMMANDS = (nav_command, experiments_command, loop_command, stance_command)
 
 
 def _generate(args) -> int:
