@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gaitsim.scenario import scenario_from_dict
-from gaitsim.stance import command, sweep as sweeps
+from gaitsim.stance import command, sweep as sweeps, twin as twins
 from gaitsim.stance.events import MERGE_GAP_S, RATE_EVENT, gait_events, group_stances
 from gaitsim.simulate import simulate_walk
 from nav import detectors
@@ -119,13 +119,16 @@ def test_comparison_takes_the_real_uncertainty_as_the_bound_where_it_is_larger()
 
 @pytest.mark.skipif(not (DATA / "gaitmap-healthy").is_dir(), reason="shared gaitmap data not found")
 def test_committed_results_still_match_a_small_run():
-    """gaitmap's left foot re-run (few bootstrap draws): the real and twin curves equal the committed ones."""
+    """gaitmap's left foot re-run in part (the smallest and largest threshold, few bootstrap draws): the measured
+    gait, the twin's scenario and the real curves equal the committed ones."""
     committed = json.loads((ROOT / "results/stance/gaitmap-healthy/left/fig5.json").read_text())
     label, rec = command.load_recordings("gaitmap-healthy", DATA)[0]
-    site, site_track = command.SITES["gaitmap-healthy"]
-    result = command.study_recording(rec, site, site_track, command.SENSORS["gaitmap-healthy"], bootstrap=10)
-    for side in ("real", "twin"):
-        for name in ("underestimate_pct", "in_window_velocity_mps", "window_s"):
-            np.testing.assert_allclose(result[side][name]["value"], committed[side][name]["value"], rtol=1e-6,
-                                       atol=1e-9)
-    assert math.isclose(result["gait"]["stride_period_s"], committed["gait"]["stride_period_s"], rel_tol=1e-9)
+    site, _ = command.SITES["gaitmap-healthy"]
+    gait = twins.measure_gait(rec, rec.reference.t, rec.reference.pos)
+    spec = twins.TwinSpec(mount=site, micromotion={"foot": label}, sensor=command.SENSORS["gaitmap-healthy"])
+    assert json.loads(json.dumps(twins.match_timing(gait, spec))) == committed["twin_scenario"]
+    real = sweeps.sweep(rec, rec.reference.t, rec.reference.pos, thresholds=(1e4, 5e4), bootstrap=10)
+    for name in ("underestimate_pct", "in_window_velocity_mps", "window_s"):
+        np.testing.assert_allclose(real.curves[name].value, np.array(committed["real"][name]["value"])[[0, -1]],
+                                   rtol=1e-6, atol=1e-9)
+    assert math.isclose(gait.stride_period_s, committed["gait"]["stride_period_s"], rel_tol=1e-9)
