@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from nav import command as nav_command
+from nav import storage
 
 from .errors import ScenarioError
 from .experiments import command as experiments_command
@@ -19,13 +20,22 @@ SUBCOMMANDS = (nav_command, experiments_command, loop_command)
 
 def _generate(args) -> int:
     scenario = load_scenario(args.scenario)
-    recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force)
+    recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force, form=args.format,
+                    parquet=args.parquet, progress=not args.no_progress)
     print(summary(recs[0]))
     if len(recs) > 1:
         print(f"  ... {len(recs)} runs written to {args.out}/run-000 .. run-{len(recs) - 1:03d}")
     else:
         print(f"  written to {args.out}")
     return 0
+
+
+def add_storage_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--format`` and ``--parquet``: how a command stores the tables it writes (nav.storage)."""
+    parser.add_argument("--format", choices=storage.FORMS, default=storage.DEFAULT_FORM,
+                        help="table files: gzip-compressed CSV (default) or plain CSV")
+    parser.add_argument("--parquet", action="store_true",
+                        help=f"also write a Parquet twin of every table, for speed ({storage.PARQUET_EXTRA})")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -37,6 +47,8 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--seed", type=int, default=None, help="base seed (default: the scenario's)")
     gen.add_argument("--runs", type=int, default=None, help="number of runs (default: the scenario's)")
     gen.add_argument("--force", action="store_true", help="replace an existing output folder")
+    add_storage_arguments(gen)
+    gen.add_argument("--no-progress", action="store_true", help="no progress bar over the runs")
     gen.set_defaults(func=_generate)
     for module in SUBCOMMANDS:
         module.add_parser(sub)
@@ -48,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ScenarioError, FileExistsError, FileNotFoundError, ValueError) as exc:
+    except (ScenarioError, FileExistsError, FileNotFoundError, ValueError, ImportError) as exc:
         print(f"gaitsim {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -15,9 +15,14 @@ A recording is a folder anyone can read without this project:
 ``reference.csv`` (measured recordings, optional)
     ``t, pos_x, pos_y, pos_z`` in the recording's world frame (m), on the IMU clock.
 ``meta.json``
-    schema version, generator, frames and units of every column, gait/path/sensor parameters, seed.
-``recording.npz`` (optional)
-    a binary twin of the CSVs for speed; the CSVs stay the reference.
+    schema version, generator, frames and units of every column, gait/path/sensor parameters, seed, and how the
+    tables are stored (``storage``: form, the resolution of rounded columns, SHA-256 of every table file).
+
+Storage (:mod:`nav.storage`): each table is ``NAME.csv.gz`` (gzip-compressed CSV, the default) or ``NAME.csv``
+(``form="csv"``); either may have a Parquet twin ``NAME.parquet`` (optional, pyarrow) for speed. Every value is
+stored exactly (float64 round trip) except the truth's position, velocity and attitude, stored to
+:data:`TRUTH_RESOLUTION` (1 nm, 1 nm/s, 1e-12): the increments ``dv``, ``dth``, the rates, specific force and
+times stay exact. Folders written before this form (plain CSVs with a ``recording.npz`` twin) are read as well.
 
 This module belongs to ``nav`` so that the filter can read any recording without the simulator;
 ``gaitsim`` imports it to write them.
@@ -31,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import storage
 from .constants import DEFAULT_GRAVITY
 from .files import atomic_output_dir
 
@@ -44,6 +50,10 @@ TRUTH_COLUMNS = (
 )
 EVENT_COLUMNS = ("stride", "t_ic", "t_ff", "t_ho", "t_to", "disp_x", "disp_y", "disp_z")
 REFERENCE_COLUMNS = ("t", "pos_x", "pos_y", "pos_z")
+TABLE_COLUMNS = {"imu": IMU_COLUMNS, "truth": TRUTH_COLUMNS, "events": EVENT_COLUMNS, "reference": REFERENCE_COLUMNS}
+# decimal places (of m, m/s, 1) to which the truth's position, velocity and attitude are stored; every other column
+# is stored exactly. 1 nm is 65x below the strapdown-on-increments error of a 100 m walk (README).
+TRUTH_RESOLUTION = {"pos": 9, "vel": 9, "q": 12}
 
 COLUMN_UNITS = {
     "imu.csv": {"t": "s", "acc": "m/s^2, specific force, sensor frame", "gyr": "rad/s, sensor frame"},
@@ -162,15 +172,19 @@ class Recording:
         return float(self.meta.get("sampling", {}).get("gravity_mps2", DEFAULT_GRAVITY))
 
 
-def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
-    """Write a table with a header row of column names; ``%.17g`` round-trips float64 exactly."""
-    np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> None:
+    """Write a table with a header row of column names, gzip-compressed when ``path`` ends in ``.gz``.
+
+    Values round-trip float64 exactly (``%.17g``) except in columns whose name before ``_`` is a key of
+    ``resolution`` (decimal places; see :func:`nav.storage.column_formats`).
+    """
+    storage.write_text(path, storage.table_text(header, table, resolution))
 
 
 def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
-    """The (M, len(header)) table of a CSV written by :func:`write_csv`; raises RecordingError naming the file
-    when its header or column count is not ``header``'s."""
-    with open(path) as fh:
+    """The (M, len(header)) table of a CSV (plain or ``.gz``) written by :func:`write_csv`; raises RecordingError
+    naming the file when its header or column count is not ``header``'s."""
+    with storage.open_text(path) as fh:
         first = fh.readline().strip().split(",")
     if tuple(first) != header:
         raise RecordingError(f"{path}: header {first} does not match the expected columns {list(header)}")
@@ -180,27 +194,51 @@ def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
     return table
 
 
-def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> None:
+def table_file(folder: Path, name: str) -> Path | None:
+    """The file holding table ``name`` ("imu", "truth", ...) in ``folder``: ``name.csv.gz`` or ``name.csv``; None
+    if neither exists; RecordingError naming both if both do (which one is meant is unknown)."""
+    found = [Path(folder) / f"{name}.{form}" for form in storage.FORMS if (Path(folder) / f"{name}.{form}").exists()]
+    if len(found) > 1:
+        raise RecordingError(f"{folder}: both {found[0].name} and {found[1].name}; keep one of them")
+    return found[0] if found else None
+
+
+def _tables(rec: Recording) -> dict[str, np.ndarray]:
+    tables = {"imu": np.column_stack([rec.t, rec.acc, rec.gyr])}
+    if rec.truth is not None:
+        tables["truth"] = rec.truth.as_table()
+    if rec.events is not None:
+        tables["events"] = rec.events.as_table()
+    if rec.reference is not None:
+        tables["reference"] = np.column_stack([rec.reference.t, rec.reference.pos])
+    return tables
+
+
+def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAULT_FORM, parquet: bool = False) -> None:
     """Write ``rec`` into an existing (temporary) folder. Prefer :func:`write_recording`."""
     folder = Path(folder)
-    write_csv(folder / "imu.csv", IMU_COLUMNS, np.column_stack([rec.t, rec.acc, rec.gyr]))
-    arrays = {"imu": np.column_stack([rec.t, rec.acc, rec.gyr])}
-    if rec.truth is not None:
-        arrays["truth"] = rec.truth.as_table()
-        write_csv(folder / "truth.csv", TRUTH_COLUMNS, arrays["truth"])
-    if rec.events is not None:
-        arrays["events"] = rec.events.as_table()
-        write_csv(folder / "events.csv", EVENT_COLUMNS, arrays["events"])
-    if rec.reference is not None:
-        arrays["reference"] = np.column_stack([rec.reference.t, rec.reference.pos])
-        write_csv(folder / "reference.csv", REFERENCE_COLUMNS, arrays["reference"])
+    storage.check_form(form)
+    files = {}
+    for name, table in _tables(rec).items():
+        path = folder / f"{name}.{form}"
+        resolution = TRUTH_RESOLUTION if name == "truth" else None
+        write_csv(path, TABLE_COLUMNS[name], table, resolution)
+        files[path.name] = storage.sha256(path)
+        if parquet:
+            twin = storage.write_twin(path, TABLE_COLUMNS[name],
+                                      table if resolution is None else read_csv(path, TABLE_COLUMNS[name]))
+            files[twin.name] = storage.sha256(twin)
     meta = dict(rec.meta)
     meta.setdefault("schema_version", SCHEMA_VERSION)
-    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if (folder / k).exists() or k == "imu.csv"})
+    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if k.split(".")[0] in _tables(rec)})
+    meta["storage"] = {
+        "form": form,
+        "exact": "every column is stored as float64 round trip (%.17g) except those in 'resolution'",
+        "resolution": {"truth": {f"{k}_*": 10.0 ** -v for k, v in TRUTH_RESOLUTION.items()}} if rec.truth is not None else {},
+        "sha256": files,
+    }
     with open(folder / "meta.json", "w") as fh:
         json.dump(meta, fh, indent=2, sort_keys=True, default=_json_default)
-    if binary:
-        np.savez(folder / "recording.npz", **arrays)
 
 
 def _json_default(o):
@@ -211,18 +249,38 @@ def _json_default(o):
     raise TypeError(f"meta.json: cannot serialise {type(o).__name__}")
 
 
-def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False, binary: bool = True) -> Path:
-    """Write a recording folder atomically: an interrupted write leaves nothing at ``folder``."""
+def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False, form: str = storage.DEFAULT_FORM,
+                    parquet: bool = False) -> Path:
+    """Write a recording folder atomically: an interrupted write leaves nothing at ``folder``.
+
+    Parameters
+    ----------
+    rec : the recording.
+    folder : the output folder.
+    overwrite : replace an existing non-empty folder.
+    form : "csv.gz" (default) or "csv": how every table is stored (:mod:`nav.storage`).
+    parquet : also write a Parquet twin of every table (needs pyarrow).
+    """
     with atomic_output_dir(folder, overwrite) as tmp:
-        write_recording_into(rec, tmp, binary=binary)
+        write_recording_into(rec, tmp, form=form, parquet=parquet)
     return Path(folder)
 
 
+def _read_table(path: Path, columns: tuple[str, ...], prefer_binary: bool) -> np.ndarray:
+    twin = storage.read_twin(path, columns) if prefer_binary else None
+    return twin if twin is not None else read_csv(path, columns)
+
+
 def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
-    """Read a recording folder written by :func:`write_recording` (or by hand in the same format)."""
+    """Read a recording folder written by :func:`write_recording` (or by hand in the same format).
+
+    ``prefer_binary``: read a table's Parquet twin (or an older folder's ``recording.npz``) instead of its CSV
+    when there is one that matches it.
+    """
     folder = Path(folder)
-    if not (folder / "imu.csv").exists():
-        raise RecordingError(f"{folder}: not a recording folder (no imu.csv)")
+    imu_file = table_file(folder, "imu")
+    if imu_file is None:
+        raise RecordingError(f"{folder}: not a recording folder (no imu.csv or imu.csv.gz)")
     meta = {}
     if (folder / "meta.json").exists():
         with open(folder / "meta.json") as fh:
@@ -232,14 +290,11 @@ def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
         with np.load(npz_path) as z:
             tables = {k: z[k] for k in z.files}
     else:
-        tables = {"imu": read_csv(folder / "imu.csv", IMU_COLUMNS)}
-        for key, name, cols in (
-            ("truth", "truth.csv", TRUTH_COLUMNS),
-            ("events", "events.csv", EVENT_COLUMNS),
-            ("reference", "reference.csv", REFERENCE_COLUMNS),
-        ):
-            if (folder / name).exists():
-                tables[key] = read_csv(folder / name, cols)
+        tables = {}
+        for name, columns in TABLE_COLUMNS.items():
+            path = table_file(folder, name)
+            if path is not None:
+                tables[name] = _read_table(path, columns, prefer_binary)
     imu = tables["imu"]
     rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta)
     if "truth" in tables:
@@ -255,9 +310,10 @@ def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
 def list_runs(folder: str | Path) -> list[Path]:
     """The recordings in ``folder``: itself if it is one, else its ``run-NNN`` subfolders in order."""
     folder = Path(folder)
-    if (folder / "imu.csv").exists():
+    if table_file(folder, "imu") is not None:
         return [folder]
-    runs = sorted(p for p in folder.glob("run-*") if (p / "imu.csv").exists())
+    runs = sorted(p for p in folder.glob("run-*") if table_file(p, "imu") is not None)
     if not runs:
-        raise RecordingError(f"{folder}: neither a recording (imu.csv) nor a folder of run-NNN recordings")
+        raise RecordingError(f"{folder}: neither a recording (imu.csv or imu.csv.gz) nor a folder of run-NNN "
+                             "recordings")
     return runs
