@@ -1,4 +1,4 @@
-"""Command line: ``gaitsim generate | nav | run | reproduce | loop``. A thin layer over the Python API."""
+"""Command line: ``gaitsim generate | nav | run | reproduce | loop | import``. A thin layer over the Python API."""
 
 from __future__ import annotations
 
@@ -11,11 +11,12 @@ from nav import storage
 from .errors import ScenarioError
 from .experiments import command as experiments_command
 from .loop import command as loop_command
+from .measured import import_command
 from .scenario import load_scenario
 from .simulate import generate, summary
 
 # subcommands living in their own modules; each exposes add_parser(subparsers)
-SUBCOMMANDS = (nav_command, experiments_command, loop_command)
+SUBCOMMANDS = (nav_command, experiments_command, loop_command, import_command)
 
 
 def _generate(args) -> int:
@@ -30,14 +31,6 @@ def _generate(args) -> int:
     return 0
 
 
-def add_storage_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--format`` and ``--parquet``: how a command stores the tables it writes (nav.storage)."""
-    parser.add_argument("--format", choices=storage.FORMS, default=storage.DEFAULT_FORM,
-                        help="table files: gzip-compressed CSV (default) or plain CSV")
-    parser.add_argument("--parquet", action="store_true",
-                        help=f"also write a Parquet twin of every table, for speed ({storage.PARQUET_EXTRA})")
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="gaitsim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -47,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--seed", type=int, default=None, help="base seed (default: the scenario's)")
     gen.add_argument("--runs", type=int, default=None, help="number of runs (default: the scenario's)")
     gen.add_argument("--force", action="store_true", help="replace an existing output folder")
-    add_storage_arguments(gen)
+    storage.add_arguments(gen)
     gen.add_argument("--no-progress", action="store_true", help="no progress bar over the runs")
     gen.set_defaults(func=_generate)
     for module in SUBCOMMANDS:

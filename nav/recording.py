@@ -234,7 +234,8 @@ def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAU
     meta["storage"] = {
         "form": form,
         "exact": "every column is stored as float64 round trip (%.17g) except those in 'resolution'",
-        "resolution": {"truth": {f"{k}_*": 10.0 ** -v for k, v in TRUTH_RESOLUTION.items()}} if rec.truth is not None else {},
+        "resolution": ({"truth": {f"{k}_*": 10.0 ** -v for k, v in TRUTH_RESOLUTION.items()}}
+                       if rec.truth is not None else {}),
         "sha256": files,
     }
     with open(folder / "meta.json", "w") as fh:

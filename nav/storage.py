@@ -125,3 +125,11 @@ def read_twin(csv_path: Path, header: tuple[str, ...]) -> np.ndarray | None:
                       f"recorded CSV hash {recorded[:12] or 'none'}); reading the CSV", stacklevel=3)
         return None
     return np.column_stack([arrow.column(name).to_numpy() for name in header]).astype(float)
+
+
+def add_arguments(parser) -> None:
+    """``--format`` and ``--parquet`` on an argparse parser: how a command stores the tables it writes."""
+    parser.add_argument("--format", choices=FORMS, default=DEFAULT_FORM,
+                        help="table files: gzip-compressed CSV (default) or plain CSV")
+    parser.add_argument("--parquet", action="store_true",
+                        help=f"also write a Parquet twin of every table, for speed ({PARQUET_EXTRA})")
