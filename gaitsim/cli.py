@@ -1,4 +1,4 @@
-"""Command line: ``gaitsim generate | nav | run | reproduce | loop | import``. A thin layer over the Python API."""
+"""Command line: ``gaitsim generate | nav | run | reproduce | loop | import | fixtures | score``. A thin layer over the Python API."""
 
 from __future__ import annotations
 
@@ -10,13 +10,14 @@ from nav import storage
 
 from .errors import ScenarioError
 from .experiments import command as experiments_command
+from .fixtures import command as fixtures_command
 from .loop import command as loop_command
 from .measured import import_command
 from .scenario import load_scenario
 from .simulate import generate, summary
 
 # subcommands living in their own modules; each exposes add_parser(subparsers)
-SUBCOMMANDS = (nav_command, experiments_command, loop_command, import_command)
+SUBCOMMANDS = (nav_command, experiments_command, loop_command, import_command, fixtures_command)
 
 
 def _generate(args) -> int:
