@@ -19,10 +19,12 @@ A recording is a folder anyone can read without this project:
     tables are stored (``storage``: form, the resolution of rounded columns, SHA-256 of every table file).
 
 Storage (:mod:`nav.storage`): each table is ``NAME.csv.gz`` (gzip-compressed CSV, the default) or ``NAME.csv``
-(``form="csv"``); either may have a Parquet twin ``NAME.parquet`` (optional, pyarrow) for speed. Every value is
-stored exactly (float64 round trip) except the truth's position, velocity and attitude, stored to
-:data:`TRUTH_RESOLUTION` (1 nm, 1 nm/s, 1e-12): the increments ``dv``, ``dth``, the rates, specific force and
-times stay exact. Folders written before this form (plain CSVs with a ``recording.npz`` twin) are read as well.
+(``form="csv"``). Every value is stored exactly (float64 round trip) except the truth's position, velocity and
+attitude, stored to :data:`TRUTH_RESOLUTION` (1 nm, 1 nm/s, 1e-12): the increments ``dv``, ``dth``, the rates,
+specific force and times stay exact. A table may have a Parquet twin ``NAME.parquet`` (optional, pyarrow) for
+speed; the CSVs stay the reference: a twin holds the SHA-256 of the CSV file it was written with, and the reader
+uses it only while that still matches the CSV. (The ``recording.npz`` twin of older folders is not read: their
+CSVs are.)
 
 This module belongs to ``nav`` so that the filter can read any recording without the simulator;
 ``gaitsim`` imports it to write them.
@@ -31,6 +33,7 @@ This module belongs to ``nav`` so that the filter can read any recording without
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +57,9 @@ TABLE_COLUMNS = {"imu": IMU_COLUMNS, "truth": TRUTH_COLUMNS, "events": EVENT_COL
 # decimal places (of m, m/s, 1) to which the truth's position, velocity and attitude are stored; every other column
 # is stored exactly. 1 nm is 65x below the strapdown-on-increments error of a 100 m walk (README).
 TRUTH_RESOLUTION = {"pos": 9, "vel": 9, "q": 12}
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}  # unit of a file's time columns -> s per unit
+MAX_TRUTH_CLOCK_SHARE = 0.01  # truth and IMU times on equal rows may differ by half a period + this share of
+# the span (timestamp jitter and clock error of a simulated sensor)
 
 COLUMN_UNITS = {
     "imu.csv": {"t": "s", "acc": "m/s^2, specific force, sensor frame", "gyr": "rad/s, sensor frame"},
@@ -71,6 +77,10 @@ COLUMN_UNITS = {
 
 class RecordingError(ValueError):
     """A recording folder or array that cannot be used; the message names file, column and value."""
+
+
+class RecordingWarning(UserWarning):
+    """Something in a recording folder was flagged or ignored (a stale binary twin, reference dropouts)."""
 
 
 @dataclass
@@ -152,6 +162,7 @@ class Recording:
     gyr : (N, 3) rad/s measured angular rate, sensor frame.
     meta : dict, the content of ``meta.json``.
     truth, events, reference : optional.
+    flags : counts of what the reader flagged and left as it is (e.g. ``reference_nan_rows``).
     """
 
     t: np.ndarray
@@ -161,6 +172,7 @@ class Recording:
     truth: Truth | None = None
     events: Events | None = None
     reference: Reference | None = None
+    flags: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -182,16 +194,73 @@ def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray, resolution
 
 
 def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
-    """The (M, len(header)) table of a CSV (plain or ``.gz``) written by :func:`write_csv`; raises RecordingError
-    naming the file when its header or column count is not ``header``'s."""
-    with storage.open_text(path) as fh:
-        first = fh.readline().strip().split(",")
-    if tuple(first) != header:
-        raise RecordingError(f"{path}: header {first} does not match the expected columns {list(header)}")
-    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    """The (M, len(header)) table of a CSV (plain or ``.gz``) written by :func:`write_csv` (NaN cells allowed: the
+    caller decides).
+
+    Raises
+    ------
+    RecordingError
+        naming the file, and the line and column where a cell is not a number or a line has the wrong number
+        of cells; for a missing or non-text file, a header that is not ``header``, or no data rows.
+    """
+    path = Path(path)
+    try:
+        with storage.open_text(path) as fh:
+            first = fh.readline().strip().split(",")
+            if tuple(first) != header:
+                raise RecordingError(f"{path}: line 1: header {first} does not match the expected columns "
+                                     f"{list(header)}")
+            table = np.loadtxt(fh, delimiter=",", ndmin=2, dtype=float)
+    except FileNotFoundError:
+        raise RecordingError(f"{path}: file not found") from None
+    except UnicodeDecodeError as exc:
+        raise RecordingError(f"{path}: not a text CSV file ({exc.reason} at byte {exc.start})") from None
+    except (OSError, EOFError) as exc:  # gzip.BadGzipFile, a truncated .gz
+        raise RecordingError(f"{path}: not a readable gzip file ({type(exc).__name__}: {exc})") from None
+    except ValueError as exc:
+        _raise_bad_cell(path, header)
+        raise RecordingError(f"{path}: not a table of numbers ({exc})") from None
+    if table.shape[0] == 0:
+        raise RecordingError(f"{path}: no data rows below the header")
     if table.shape[1] != len(header):
-        raise RecordingError(f"{path}: {table.shape[1]} columns, expected {len(header)}")
+        raise RecordingError(f"{path}: {table.shape[1]} columns, expected {len(header)} ({', '.join(header)})")
     return table
+
+
+def _raise_bad_cell(path: Path, header: tuple[str, ...]) -> None:
+    """Find the first line of ``path`` that numpy could not parse and raise naming its line and column."""
+    with storage.open_text(path) as fh:
+        fh.readline()
+        for line_number, line in enumerate(fh, start=2):
+            if not line.strip():
+                continue
+            cells = line.rstrip("\r\n").split(",")
+            if len(cells) != len(header):
+                raise RecordingError(f"{path}: line {line_number}: {len(cells)} cells, expected {len(header)} "
+                                     f"({', '.join(header)}); truncated or extra cells")
+            for column, cell in zip(header, cells):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise RecordingError(f"{path}: line {line_number}, column {column}: {cell.strip()!r} is not a "
+                                         "number") from None
+
+
+def nonfinite_cells(table: np.ndarray, header: tuple[str, ...]) -> tuple[dict[str, int], int]:
+    """NaN/inf cells of a table: (count per column that has any, first data row holding one, 1-based; 0 if none)."""
+    bad = ~np.isfinite(table)
+    if not bad.any():
+        return {}, 0
+    per_column = {column: int(n) for column, n in zip(header, bad.sum(axis=0)) if n}
+    return per_column, int(np.flatnonzero(bad.any(axis=1))[0]) + 1
+
+
+def require_finite(table: np.ndarray, header: tuple[str, ...], name: str) -> None:
+    """Raise :class:`RecordingError` naming ``name``, the columns and the first data row with NaN/inf cells."""
+    per_column, first = nonfinite_cells(table, header)
+    if per_column:
+        raise RecordingError(f"{name}: {sum(per_column.values())} NaN/inf cells (per column {per_column}; first in "
+                             f"data row {first}, line {first + 1}); every value must be finite")
 
 
 def table_file(folder: Path, name: str) -> Path | None:
@@ -267,37 +336,68 @@ def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False,
     return Path(folder)
 
 
+def _read_meta(folder: Path) -> dict:
+    path = folder / "meta.json"
+    if not path.exists():
+        return {}
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise RecordingError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise RecordingError(f"{path}: must hold a JSON object ({{...}}), holds a {type(meta).__name__}")
+    return meta
+
+
 def _read_table(path: Path, columns: tuple[str, ...], prefer_binary: bool) -> np.ndarray:
-    twin = storage.read_twin(path, columns) if prefer_binary else None
+    """The table of the CSV ``path``, from its Parquet twin when ``prefer_binary`` and the twin carries the CSV's
+    SHA-256 (else a :class:`RecordingWarning` says why the twin is ignored)."""
+    twin = storage.read_twin(path, columns, RecordingWarning) if prefer_binary else None
     return twin if twin is not None else read_csv(path, columns)
 
 
-def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
+def _time_columns(key: str) -> list[int]:
+    """Indices of the columns holding times in the table ``key``."""
+    return [1, 2, 3, 4] if key == "events" else [0]
+
+
+def read_recording(folder: str | Path, prefer_binary: bool = True, time_unit: str = "s") -> Recording:
     """Read a recording folder written by :func:`write_recording` (or by hand in the same format).
 
-    ``prefer_binary``: read a table's Parquet twin (or an older folder's ``recording.npz``) instead of its CSV
-    when there is one that matches it.
+    Parameters
+    ----------
+    folder : the recording folder (``imu.csv.gz`` or ``imu.csv`` required).
+    prefer_binary : read a table's Parquet twin instead of parsing its CSV when the twin carries the SHA-256 of
+        the CSV beside it; a twin without it, with another, or unreadable is ignored with a
+        :class:`RecordingWarning`. The CSVs are the reference.
+    time_unit : unit of every time column in the files (one of :data:`TIME_UNITS`); converted to s here.
+
+    Raises
+    ------
+    RecordingError
+        naming the file, line and column of a cell that is not a number, NaN/inf in imu, truth or events,
+        timestamps that do not increase, files whose time spans do not match, or a meta.json that is not a
+        JSON object. NaN rows in reference.csv (tracking dropouts) are not an error: they are counted in
+        ``Recording.flags`` and left out of scoring.
     """
     folder = Path(folder)
-    imu_file = table_file(folder, "imu")
-    if imu_file is None:
-        raise RecordingError(f"{folder}: not a recording folder (no imu.csv or imu.csv.gz)")
-    meta = {}
-    if (folder / "meta.json").exists():
-        with open(folder / "meta.json") as fh:
-            meta = json.load(fh)
-    npz_path = folder / "recording.npz"
-    if prefer_binary and npz_path.exists():
-        with np.load(npz_path) as z:
-            tables = {k: z[k] for k in z.files}
-    else:
-        tables = {}
-        for name, columns in TABLE_COLUMNS.items():
-            path = table_file(folder, name)
-            if path is not None:
-                tables[name] = _read_table(path, columns, prefer_binary)
+    if time_unit not in TIME_UNITS:
+        raise RecordingError(f"time_unit = {time_unit!r}; allowed: {', '.join(TIME_UNITS)}")
+    files = {key: table_file(folder, key) for key in TABLE_COLUMNS}
+    files = {key: path for key, path in files.items() if path is not None}
+    if "imu" not in files:
+        raise RecordingError(f"{folder}: not a recording folder (no imu.csv.gz or imu.csv)")
+    meta = _read_meta(folder)
+    tables = {}
+    for key, path in files.items():
+        table = _read_table(path, TABLE_COLUMNS[key], prefer_binary).copy()
+        if table.shape[0] == 0:
+            raise RecordingError(f"{path}: no data rows")
+        table[:, _time_columns(key)] *= TIME_UNITS[time_unit]
+        tables[key] = table
+    flags = _check_tables({key: str(path) for key, path in files.items()}, tables)
     imu = tables["imu"]
-    rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta)
+    rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta, flags=flags)
     if "truth" in tables:
         rec.truth = Truth.from_table(tables["truth"])
     if "events" in tables:
@@ -308,6 +408,69 @@ def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
     return rec
 
 
+def _increasing(t: np.ndarray, name: str) -> None:
+    """Raise naming ``name`` and the first data row where the time column ``t`` does not increase."""
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        row = int(np.flatnonzero(steps <= 0)[0]) + 2
+        raise RecordingError(f"{name}: column t: {int(np.sum(steps == 0))} repeated and {int(np.sum(steps < 0))} "
+                             f"decreasing timestamps (first at data row {row}, line {row + 1}: t = {t[row - 1]!r} "
+                             f"after {t[row - 2]!r}); time must increase")
+
+
+def _check_tables(names: dict[str, str], tables: dict) -> dict:
+    """Finite values, increasing time and matching time spans across the files (``names``: table key -> file
+    name for messages); returns the reader's flags."""
+    imu = tables["imu"]
+    require_finite(imu, IMU_COLUMNS, names["imu"])
+    t = imu[:, 0]
+    period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    span = (t[0], t[-1])
+    slack = 2 * period + 0.02 * (span[1] - span[0])  # clock error and skew move a simulated IMU clock this much
+    flags = {}
+    if "truth" in tables:
+        truth = tables["truth"]
+        name = names["truth"]
+        require_finite(truth, TRUTH_COLUMNS, name)
+        _increasing(truth[:, 0], name)
+        if len(truth) == len(imu):
+            offset = float(np.max(np.abs(truth[:, 0] - t)))
+            if offset > 0.5 * period + MAX_TRUTH_CLOCK_SHARE * (span[1] - span[0]):
+                raise RecordingError(f"{name}: column t differs from the IMU file's by up to {offset:.6g} s with the same "
+                                     "number of rows; the two files are not on one clock")
+        elif truth[0, 0] > span[0] + slack or truth[-1, 0] < span[1] - slack:
+            raise RecordingError(f"{name}: {len(truth)} rows over t = {truth[0, 0]:.6g}..{truth[-1, 0]:.6g} s do not "
+                                 f"cover the IMU file's {len(imu)} rows over t = {span[0]:.6g}..{span[1]:.6g} s")
+    if "events" in tables:
+        events = tables["events"]
+        name = names["events"]
+        require_finite(events, EVENT_COLUMNS, name)
+        times = events[:, 1:5]
+        order = np.diff(times, axis=1)
+        if np.any(order < 0):
+            row = int(np.flatnonzero((order < 0).any(axis=1))[0]) + 1
+            raise RecordingError(f"{name}: data row {row}: events out of order (t_ic <= t_ff <= t_ho <= t_to "
+                                 f"required): {times[row - 1].tolist()}")
+        if times.min() < span[0] - slack or times.max() > span[1] + slack:
+            raise RecordingError(f"{name}: event times {times.min():.6g}..{times.max():.6g} s fall outside the IMU file's "
+                                 f"{span[0]:.6g}..{span[1]:.6g} s")
+    if "reference" in tables:
+        ref = tables["reference"]
+        name = names["reference"]
+        require_finite(ref[:, :1], REFERENCE_COLUMNS[:1], name)
+        _increasing(ref[:, 0], name)
+        gaps, first = nonfinite_cells(ref[:, 1:], REFERENCE_COLUMNS[1:])
+        if gaps:
+            rows = int(np.sum(~np.isfinite(ref[:, 1:]).all(axis=1)))
+            flags["reference_nan_rows"] = rows
+            warnings.warn(f"{name}: {rows} of {len(ref)} rows hold NaN positions (per column {gaps}; first in data "
+                          f"row {first}): tracking dropouts, left out of scoring", RecordingWarning, stacklevel=3)
+        if ref[-1, 0] < span[0] or ref[0, 0] > span[1]:
+            raise RecordingError(f"{name}: t = {ref[0, 0]:.6g}..{ref[-1, 0]:.6g} s does not overlap the IMU file's "
+                                 f"{span[0]:.6g}..{span[1]:.6g} s")
+    return flags
+
+
 def list_runs(folder: str | Path) -> list[Path]:
     """The recordings in ``folder``: itself if it is one, else its ``run-NNN`` subfolders in order."""
     folder = Path(folder)
@@ -315,6 +478,6 @@ def list_runs(folder: str | Path) -> list[Path]:
         return [folder]
     runs = sorted(p for p in folder.glob("run-*") if table_file(p, "imu") is not None)
     if not runs:
-        raise RecordingError(f"{folder}: neither a recording (imu.csv or imu.csv.gz) nor a folder of run-NNN "
+        raise RecordingError(f"{folder}: neither a recording (imu.csv.gz or imu.csv) nor a folder of run-NNN "
                              "recordings")
     return runs

@@ -111,18 +111,25 @@ def write_twin(csv_path: Path, header: tuple[str, ...], table: np.ndarray) -> Pa
     return path
 
 
-def read_twin(csv_path: Path, header: tuple[str, ...]) -> np.ndarray | None:
+def read_twin(csv_path: Path, header: tuple[str, ...], category: type[Warning] = UserWarning) -> np.ndarray | None:
     """The table of the Parquet twin of ``csv_path``; None when there is no twin or pyarrow is missing, and None
-    with a warning when the twin's columns are not ``header`` or it does not twin the CSV as it is now."""
+    with a warning of ``category`` saying why when the twin is unreadable, its columns are not ``header`` or it
+    does not carry the SHA-256 of the CSV as it is now (the CSV is the reference)."""
     path = twin_path(csv_path)
     pa = _pyarrow()
     if pa is None or not path.exists():
         return None
-    arrow = pa.parquet.read_table(path)
+    try:
+        arrow = pa.parquet.read_table(path)
+    except Exception as exc:  # any unreadable twin (truncated, not Parquet) falls back to the CSV
+        warnings.warn(f"{path}: unreadable binary twin ({type(exc).__name__}: {exc}); reading "
+                      f"{Path(csv_path).name}", category, stacklevel=3)
+        return None
     recorded = (arrow.schema.metadata or {}).get(TWIN_HASH_KEY, b"").decode()
     if tuple(arrow.column_names) != tuple(header) or recorded != sha256(csv_path):
-        warnings.warn(f"{path}: not a twin of {Path(csv_path).name} as it is now (columns {arrow.column_names}, "
-                      f"recorded CSV hash {recorded[:12] or 'none'}); reading the CSV", stacklevel=3)
+        warnings.warn(f"{path}: ignored: it does not carry the current digest of {Path(csv_path).name} (columns "
+                      f"{arrow.column_names}, recorded CSV SHA-256 {recorded[:12] or 'none'}); reading the CSV",
+                      category, stacklevel=3)
         return None
     return np.column_stack([arrow.column(name).to_numpy() for name in header]).astype(float)
 

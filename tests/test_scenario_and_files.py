@@ -141,7 +141,7 @@ def test_parquet_twin_is_read_only_while_it_matches_its_csv(tmp_path):
     # a CSV edited after the twin was written: the twin no longer matches and is ignored, loudly
     imu = tmp_path / "rec/imu.csv.gz"
     storage.write_text(imu, storage.table_text(IMU_COLUMNS, np.column_stack([rec.t, rec.acc + 1.0, rec.gyr])))
-    with pytest.warns(UserWarning, match="not a twin of imu.csv.gz"):
+    with pytest.warns(UserWarning, match="does not carry the current digest of imu.csv.gz"):
         back = read_recording(tmp_path / "rec")
     np.testing.assert_array_equal(back.acc, rec.acc + 1.0)
 

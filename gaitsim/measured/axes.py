@@ -8,22 +8,29 @@ that becomes it, with an optional sign::
     x,-y,-z    a frame with x forward, y right, z down (pyshoe's, many NED-minded loggers)
     x,y,z      the identity
 
-Every file axis appears once, and the map must be a proper rotation (determinant +1): a mirror would turn a
-right-handed frame into a left-handed one, and angular rate (an axial vector) would then change sign wrongly.
-The same map applies to specific force and angular rate. :func:`parse_axis_map` is the one parser; the command
-line (``gaitsim import --axes``), the interop adapters and the loop's frame remaps use it.
+Every file axis appears once. The same map applies to specific force and angular rate. A map is usually a
+rotation (determinant +1); a mirror (determinant -1, e.g. ``x,-y,z``) is allowed because it undoes data that were
+mirrored alike in both sensors (a left-foot recording mirrored into a right-foot convention, a left-handed
+export): :func:`is_mirror` says which it is, the import report and the loop's frame check state it, and the frame
+checks (gravity up, toes-down swing pitch, stride closure) tell a wrong guess. :func:`parse_axis_map` is the one
+parser; the command line (``gaitsim import --axes``, ``gaitsim loop --axes``), the interop adapters and the loop's
+frame check use it.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
+
+from nav.recording import Recording
 
 AXES = "xyz"
 IDENTITY = "x,y,z"
 
 
 class AxisMapError(ValueError):
-    """An axis map that is not three signed, distinct axes forming a rotation; the message shows the map."""
+    """An axis map that is not three signed, distinct axes; the message shows the map."""
 
 
 def parse_axis_map(text: str) -> np.ndarray:
@@ -32,7 +39,7 @@ def parse_axis_map(text: str) -> np.ndarray:
     Raises
     ------
     AxisMapError
-        naming the map and what is wrong (an unknown entry, a repeated axis, a mirror).
+        naming the map and what is wrong (a wrong number of entries, an unknown entry, a repeated axis).
     """
     entries = [e.strip().lower() for e in str(text).split(",")]
     if len(entries) != 3:
@@ -48,10 +55,12 @@ def parse_axis_map(text: str) -> np.ndarray:
         matrix[row, AXES.index(axis)] = sign
     if sorted(e.lstrip("+-") for e in entries) != list(AXES):
         raise AxisMapError(f"axis map {text!r}: every file axis x, y, z must appear exactly once")
-    if np.linalg.det(matrix) < 0:
-        raise AxisMapError(f"axis map {text!r} is a mirror (determinant -1), not a rotation: flip the sign of one "
-                           "more (or one less) entry; a left-handed sensor frame cannot be used")
     return matrix
+
+
+def is_mirror(matrix: np.ndarray) -> bool:
+    """True when the axis map ``matrix`` is a mirror (determinant -1), False for a rotation."""
+    return bool(np.linalg.det(np.asarray(matrix, float)) < 0)
 
 
 def axis_map_text(matrix: np.ndarray) -> str:
@@ -71,3 +80,10 @@ def axis_map_text(matrix: np.ndarray) -> str:
 def apply_axis_map(matrix: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """(N, 3) file-frame vectors expressed in the project frame (exact: a signed permutation of columns)."""
     return np.asarray(vectors, float) @ np.asarray(matrix, float).T
+
+
+def remapped(rec: Recording, matrix: np.ndarray) -> Recording:
+    """``rec`` with its specific force and angular rate mapped by ``matrix`` (:func:`apply_axis_map`); the map's
+    text is noted in ``meta["axes"]``."""
+    meta = {**rec.meta, "axes": axis_map_text(matrix)}
+    return dataclasses.replace(rec, acc=apply_axis_map(matrix, rec.acc), gyr=apply_axis_map(matrix, rec.gyr), meta=meta)

@@ -38,7 +38,7 @@ from nav.recording import Recording, RecordingError, Reference, write_recording_
 
 from .. import __version__
 from ..imu.units import UNIT_KINDS, factor_to_si
-from .axes import AXES, IDENTITY, apply_axis_map, axis_map_text, parse_axis_map
+from .axes import AXES, IDENTITY, apply_axis_map, axis_map_text, is_mirror, parse_axis_map
 from .quality import frame_checks, frame_problems, jitter_stats, non_increasing_time_mask, timestamp_report
 
 RATE_RANGE_HZ = (20.0, 10000.0)  # sample rates a foot-mounted IMU logger plausibly has
@@ -317,6 +317,8 @@ def import_csv(path: str | Path, spec: ImportSpec = ImportSpec()) -> tuple[Recor
         time_origin_in_file_unit=timing_rows["origin"], samples=len(t), duration_s=float(t[-1]), timing=timing,
         static_specific_force_mps2=static, peak_rate_rad_s=peak, frame_checks=checks,
         warnings=[f"frame check (not enforced): {p}" for p in problems]
+        + ([f"axis map {spec.axes} is a mirror (determinant -1): right only if the file's data were mirrored in "
+             "both sensors alike"] if is_mirror(axis_matrix) else [])
         + ([f"dropped {dropped} of {len(raw)} rows whose time does not increase "
             f"({timing_rows['repeated_time_rows']} repeat the previous time)"] if dropped else []),
     )
