@@ -70,6 +70,8 @@ WRITTEN_DIGITS = 15  # significant digits of a converted value written back (the
 MAX_SWING_SPEED = 10.0  # m/s, mean foot speed over the swing (stride / swing time); sprinting feet reach ~2x this at peak
 MAX_STRIDE_SD_SHARE = 0.25  # stride-to-stride spread of the stride length, share of the stride (4 sd stay > 0)
 RADIUS_ROUNDING = 1e-9  # relative: a radius of exactly one step survives the rounding of a path's geometry
+DEFAULT_RATE_HZ = 800.0  # [sampling] rate_hz when not given
+DEFAULT_CORNER_RADIUS_M = 1.0  # [path] corner_radius_m of a polyline when not given
 MAX_SAMPLES = 5_000_000  # samples of one run (~1.7 h at 800 Hz; ~0.7 kB of memory per sample while simulating)
 MAX_JITTER_SHARE = 0.1  # timestamp jitter std, share of the sample period (10 sd apart: timestamps never reorder)
 MAX_SKEW_S = 0.05  # s, accelerometer-gyro skew (the skewed channel loses this much data at each end)
@@ -94,7 +96,7 @@ class Scenario:
     name: str
     walk: Walk
     mount: Mount = field(default_factory=Mount)
-    rate_hz: float = 800.0
+    rate_hz: float = DEFAULT_RATE_HZ
     gravity: float = DEFAULT_GRAVITY
     seed: int = 0
     runs: int = 1
@@ -297,7 +299,7 @@ def build_path(table: dict, gait: GaitParams, where: str):
         isinstance(p, list) and len(p) == 2 and all(_is_number(x) for x in p) for p in pts)
     _require(ok, where, "waypoints_m", pts, "must be a list of at least two [x, y] points (m)")
     check_value("path", "waypoints_m", pts, where)
-    radius = num("corner_radius_m", 1.0)
+    radius = num("corner_radius_m", DEFAULT_CORNER_RADIUS_M)
     _require(radius >= step, where, "corner_radius_m", radius, f"a turn radius must be at least one step ({step} m)")
     w = np.array(pts, float)
     if _check_type(where, "closed", table.get("closed", False), False):
@@ -333,7 +335,7 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     micro = fill(MicroMotionParams, doc.get("micromotion", {}), f"{source} [micromotion]")
     validate_gait(gait, impact, micro, source, written)
     mount = _mount(doc.get("mount", {}), Mount(), source)
-    rate, gravity = _sampling(doc.get("sampling", {}), 800.0, DEFAULT_GRAVITY, source)
+    rate, gravity = _sampling(doc.get("sampling", {}), DEFAULT_RATE_HZ, DEFAULT_GRAVITY, source)
 
     if "path" not in doc:
         raise ScenarioError(f"{source}: missing section [path] (kind = straight | arc | polyline | static)")
