@@ -12,6 +12,7 @@ informative only: other jobs share the machine)
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import shutil
 import tempfile
 import time
@@ -47,9 +48,7 @@ def main() -> None:
     rec = simulate_walk(scenario, seed=scenario.seed)
     print(f"99.6 m walk, vn200 sensor, {scenario.rate_hz:.0f} Hz: {rec.n} samples, {rec.t[-1] - rec.t[0]:.1f} s")
     forms = [("csv.gz", False), ("csv", False), ("csv.gz", True)]
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
+    if importlib.util.find_spec("pyarrow") is None:
         forms = forms[:2]
         print("(pyarrow not installed: no Parquet twin row)")
     work = Path(tempfile.mkdtemp(prefix="fixture-size-"))

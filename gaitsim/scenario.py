@@ -469,14 +469,18 @@ def scenario_document(scenario: Scenario) -> dict:
     return doc
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file."""
-    path = Path(path)
+def read_toml(path: str | Path, what: str = "scenario") -> dict:
+    """The document of a TOML file; ScenarioError naming the file (a ``what`` file) when it is missing or not
+    valid TOML."""
     try:
         with open(path, "rb") as fh:
-            doc = tomllib.load(fh)
+            return tomllib.load(fh)
     except FileNotFoundError:
-        raise ScenarioError(f"{path}: scenario file not found") from None
+        raise ScenarioError(f"{path}: {what} file not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
-    return scenario_from_dict(doc, str(path))
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file."""
+    return scenario_from_dict(read_toml(path), str(path))

@@ -53,6 +53,7 @@ import numpy as np
 from tqdm import tqdm
 
 from nav.files import write_text_atomic
+from nav.storage import sha256
 
 from gaitsim.errors import ScenarioError
 
@@ -290,18 +291,10 @@ def _input_files(value: Any) -> list[str]:
     return []
 
 
-def _file_sha256(path: str) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def task_digest(task: dict) -> str:
     """SHA-256 (hex) of what a run's result depends on: the task's canonical JSON, :func:`code_digest` and the
     content (not the path) of every input file the task names."""
-    files = {path: _file_sha256(path) for path in sorted(set(_input_files(task)))}
+    files = {path: sha256(path) for path in sorted(set(_input_files(task)))}
     content = sorted(files.values())
     return hashlib.sha256(_canonical_json({"task": task, "code": code_digest(), "input_files": content})
                           .encode("utf-8")).hexdigest()
