@@ -5,8 +5,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-# one thread per worker process: the Monte Carlo parallelises over runs, not inside them
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+# one BLAS thread per worker process: the Monte Carlo parallelises over runs, not inside them (these libraries read
+# the variables when they load; numba's thread count is set in each worker instead, see runner._start_worker)
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 from .reproduce import PAPER, reproduce

@@ -378,7 +378,7 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
             "importable module, or pass workers=1 to run in this process"
         ) from exc
     context = multiprocessing.get_context(_start_method())
-    with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_die_with_parent,
+    with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start_worker,
                                                 initargs=(os.getpid(),)) as pool:
         futures = {pool.submit(_execute, fn, tasks[index]): index for index in pending}
         try:
@@ -386,6 +386,19 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
                 yield futures[future], *_future_outcome(future)
         finally:
             pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _start_worker(parent_pid: int) -> None:
+    """Worker initializer: one numba thread (the pool parallelises over tasks) and no life beyond the parent's.
+
+    The thread count is set at run time rather than through ``NUMBA_NUM_THREADS``: numba refuses a changed variable
+    once its threads are up, so setting it in a process that has already compiled (a test session, a notebook)
+    breaks that process's next compilation.
+    """
+    import numba
+
+    numba.set_num_threads(1)
+    _die_with_parent(parent_pid)
 
 
 def _die_with_parent(parent_pid: int) -> None:
