@@ -83,7 +83,8 @@ RANGES: dict[str, dict[str, Range]] = {
         "foot_flat_frac": Range(0.01, 0.7, "", GAIT_LITERATURE),
         "push_off_frac": Range(0.01, 0.6, "", GAIT_LITERATURE),
         "swing_frac": Range(0.2, 0.8, "", GAIT_LITERATURE + ": swing 38-40 % walking, ~70 % running (stance ~0.3)"),
-        "pitch_heel_strike_deg": Range(-75, 0, "deg", GAIT_LITERATURE + ": -15..-30 deg toes up", open_high=True),
+        "pitch_heel_strike_deg": Range(-75, 45, "deg", GAIT_LITERATURE + ": -15..-30 deg toes up (heel strike); "
+                                       "a few deg toes down (forefoot strike: Lieberman et al., Nature 2010)"),
         "pitch_rate_heel_strike_dps": Range(-2500, 2500, "deg/s", PEAKS),
         "pitch_accel_heel_strike_dps2": Range(-200_000, 200_000, "deg/s^2", "gaitmap: -8000 deg/s^2 after toe off, x25"),
         "pitch_toe_off_deg": Range(0, 90, "deg", GAIT_LITERATURE + ": 35-60 deg heel up", open_low=True),
@@ -98,6 +99,8 @@ RANGES: dict[str, dict[str, Range]] = {
         "pitch_sd_deg": Range(0, 15, "deg", GAIT_LITERATURE),
         "stand_start_s": Range(0.5, 3_600, "s", "the filter aligns on >= 0.5 s of rest; one hour at most"),
         "stand_end_s": Range(0.5, 3_600, "s", "the filter aligns on >= 0.5 s of rest; one hour at most"),
+        "stop_every_strides": Range(0, 10_000, "strides", "0 = no stops; " + NUMERIC),
+        "stop_duration_s": Range(0, 3_600, "s", "a stop at a crossing or a door: seconds to minutes; one hour at most"),
     },
     "impact": {
         "heel_strike_velocity_mps": Range(-5, 5, "m/s", GAIT_LITERATURE + ": heel speed at contact < 1 m/s walking"),

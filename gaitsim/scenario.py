@@ -12,7 +12,12 @@ Sections and keys (every key optional unless marked; units in the key names):
                 arc:      radius_m (>= one step), turn_deg (signed, left positive), yaw_deg, start_m
                 polyline: waypoints_m [[x, y], ...] (>= 2), corner_radius_m (>= one step), closed (bool)
                 static:   duration_s (>0)
-``[gait]``      fields of :class:`gaitsim.world.gait.GaitParams`, angles in deg (``_deg``, ``_dps``, ``_dps2``)
+``[gait]``      kind = "custom" | "walk" | "run-rearfoot" | "run-forefoot" (default "custom"): the gait whose
+                speed-dependent defaults (:mod:`gaitsim.world.gaits`, at the file's cadence) fill [gait],
+                [impact] and [micromotion] under the keys the file writes; then the fields of
+                :class:`gaitsim.world.gait.GaitParams`, angles in deg (``_deg``, ``_dps``, ``_dps2``). The
+                resolved values are what a scenario holds: :func:`scenario_document` writes them all and no kind,
+                and :func:`with_changes` changes them one by one (a changed cadence does not move the others).
 ``[impact]``    fields of :class:`gaitsim.world.gait.ImpactParams`, likewise
 ``[micromotion]`` fields of :class:`gaitsim.world.gait.MicroMotionParams`, likewise
 ``[mount]``     fields of :class:`gaitsim.world.foot.Mount`, likewise
@@ -51,6 +56,7 @@ from .imu.model import SensorSpec
 from .world import path as paths
 from .world.foot import MOUNTS, Mount
 from .world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+from .world.gaits import kind_tables
 
 DEG = math.pi / 180.0  # rad per deg (deg/s and deg/s^2 convert alike)
 # scenario key (unit in its name) -> field of the world's dataclass that holds the quantity in SI (rad, rad/s, rad/s^2)
@@ -222,6 +228,11 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
     if abs(total - 1) > 1e-9:
         raise _blamed(f"{where} [gait]", {k: gait[k] for k in fracs}, written,
                       f"the phase fractions must add up to 1 (they add up to {total:.6g})")
+    strike = "forefoot strike" if g.forefoot_strike else "heel strike"
+    if (g.pitch_heel_strike > 0) != g.forefoot_strike or g.pitch_heel_strike == 0:
+        raise _blamed(f"{where} [gait]", {"pitch_heel_strike_deg": gait["pitch_heel_strike_deg"],
+                                          "forefoot_strike": g.forefoot_strike}, written,
+                      f"a {strike} lands {'toes down (pitch > 0)' if g.forefoot_strike else 'toes up (pitch < 0)'}")
     swing_s = g.swing_frac * g.cycle_s
     swing_speed = g.stride_length_m / swing_s
     if swing_speed > MAX_SWING_SPEED:
@@ -330,9 +341,10 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     runs = _checked(f"{source} [scenario]", "scenario", "runs", head.get("runs", 1), 0)
     written = frozenset(key for section in doc.values() for key in section)
 
-    gait = fill(GaitParams, doc.get("gait", {}), f"{source} [gait]")
-    impact = fill(ImpactParams, doc.get("impact", {}), f"{source} [impact]")
-    micro = fill(MicroMotionParams, doc.get("micromotion", {}), f"{source} [micromotion]")
+    tables = _world_tables(doc, source)
+    gait = fill(GaitParams, tables["gait"], f"{source} [gait]")
+    impact = fill(ImpactParams, tables["impact"], f"{source} [impact]")
+    micro = fill(MicroMotionParams, tables["micromotion"], f"{source} [micromotion]")
     validate_gait(gait, impact, micro, source, written)
     mount = _mount(doc.get("mount", {}), Mount(), source)
     rate, gravity = _sampling(doc.get("sampling", {}), DEFAULT_RATE_HZ, DEFAULT_GRAVITY, source)
@@ -351,14 +363,31 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     )
 
 
+def _world_tables(doc: dict, source: str) -> dict[str, dict]:
+    """The [gait], [impact] and [micromotion] tables of ``doc``, on top of the defaults of its gait kind."""
+    gait = dict(doc.get("gait", {}))
+    kind = _check_type(f"{source} [gait]", "kind", gait.pop("kind", "custom"), "")
+    cadence = gait.get("cadence_steps_per_min")
+    if cadence is not None:
+        cadence = _checked(f"{source} [gait]", "gait", "cadence_steps_per_min", cadence, 0.0)
+    try:
+        defaults = kind_tables(kind, cadence)
+    except ValueError as exc:
+        raise ScenarioError(f"{source} [gait]: {exc}") from None
+    return {"gait": {**defaults["gait"], **gait},
+            **{s: {**defaults[s], **doc.get(s, {})} for s in ("impact", "micromotion")}}
+
+
 def expected_samples(walk: Walk, rate_hz: float) -> int:
     """Samples of one run of ``walk`` at ``rate_hz``, estimated from the path and the gait before anything is
-    allocated (an upper bound: every cycle 4 sd long, one extra stride)."""
+    allocated (an upper bound: every cycle 4 sd long, one extra stride, one extra stop)."""
     g = walk.gait
     if walk.path is None:
         return int(math.ceil(walk.duration_s * rate_hz)) + 1
     strides = max(1, round(walk.path.length / g.stride_length_m)) + 1
-    duration = g.stand_start_s + g.stand_end_s + strides * g.cycle_s * (1 + 4 * g.cycle_sd_frac)
+    stops = strides // g.stop_every_strides if g.stop_every_strides > 0 else 0
+    duration = (g.stand_start_s + g.stand_end_s + strides * g.cycle_s * (1 + 4 * g.cycle_sd_frac)
+                + stops * g.stop_duration_s)
     return int(math.ceil(duration * rate_hz)) + 1
 
 

@@ -6,6 +6,8 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 
 - Heel rocker [t_ic, t_ff]: rotation about the heel contact (fixed but for heel-strike compression and stance
   micro-motion). Its last ``slap_duration_s`` stop the forefoot: pitch rate ``slap_rate * (1 - smoothstep)``.
+  A forefoot strike rotates about the toe contact instead (toe rocker), and its last ``slap_duration_s`` stop
+  the heel coming down: pitch rate ``-slap_rate * (1 - smoothstep)``.
 - Foot flat [t_ff, t_ho]: still, but for micro-motion, the optional stance roll-over (roll about the
   heel-toe axis, which moves neither contact point) and the optional sustained stance rotation (about a pivot
   on the heel-toe line; its angles are held through the push-off and returned over the swing).
@@ -36,9 +38,10 @@ def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams) -> s
     heel strike (its drawn pitch, ``pitch_rate_heel_strike``, ``pitch_accel_heel_strike``), start of the
     forefoot slap (``slap_rate``, with the angle left to stop at that rate), foot flat and heel off (level and
     still) and toe off (its drawn pitch, ``pitch_rate_toe_off``, ``pitch_accel_toe_off``); level at the start
-    and the end."""
+    and the end. The slap turns the foot toward level: toes down after a heel strike, heel down after a forefoot
+    strike."""
     n = plan.n_strides
-    slap_rate = impact.slap_rate
+    slap_rate = -impact.slap_rate if gait.forefoot_strike else impact.slap_rate
     strike = (gait.pitch_rate_heel_strike, gait.pitch_accel_heel_strike)
     toe_off = (gait.pitch_rate_toe_off, gait.pitch_accel_toe_off)
     knots = [(0.0, 0.0, 0.0, 0.0)]
@@ -185,11 +188,19 @@ class FootTrajectory:
     def _stance_heel(self, k: int, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) heel point during [t_ic, t_ho] of stance k.
 
+        After a forefoot strike the foot turns about its toe contact until foot flat (the gait's pitch is zero
+        from there to heel off): heel += L (u0 - x_axis(pitch)), u0 the level heel-to-toe direction.
+
         A sustained stance rotation first yaws the heel-toe line about the yaw pivot (a fraction f_y of the way
         to the toe), turning its horizontal direction from u0 to u, then pitches it about the pitch pivot (f_p):
         heel += L (f_y (u0 - u) + f_p (u - x_axis)), L the heel-toe length."""
         out = self._contact_stack(k, t)
         out[:, 0] += self.heel_base[k][:, None]
+        if self.walk.gait.forefoot_strike and k > 0:
+            yaw = np.zeros((smooth.NDER, t.size))
+            yaw[0] = self.foot_yaw[k]
+            level = self._x_axis(yaw, np.zeros_like(yaw))
+            out += self.toe_length * (level - self._x_axis(yaw, self.pitch.stack(t)))
         if self.rotation is not None and k in self.rotation:
             _, pitch, yaw = self._rotation_of(k, t)
             yaw[0] += self.foot_yaw[k]
