@@ -9,7 +9,8 @@ or a recording folder (or a folder of ``run-NNN`` recordings) with whatever refe
 a recording whose frame is not x toes, y left, z up is refused with the map to use.
 
 Every recording's folder gets ``report.md``, ``attribution.json``, ``twin.toml`` (the fitted twin, which
-``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A recording the loop cannot use is a
+``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A dataset of several recordings also
+gets the held-out prediction (:mod:`gaitsim.loop.transfer`): ``held_out.json`` and a table in the summary. A recording the loop cannot use is a
 failure: its folder holds a ``report.md`` saying why, the summary lists it, the other recordings go on, and the
 command exits 1. Written atomically: nothing appears at DIR when every recording failed.
 """
@@ -25,7 +26,7 @@ from nav.recording import RecordingError, list_runs, read_recording
 
 from ..measured import load_dataset
 from ..numbers import shown
-from . import attribution, blind, report, settings
+from . import attribution, blind, report, settings, transfer
 from .axes import parse_axes
 
 DATASETS = ("gaitmap-healthy", "ucr-fgo", "xio-ngimu")
@@ -78,13 +79,14 @@ def _failure_report(title: str, exc: Exception) -> str:
     return f"# Sim-to-real loop: {title}\n\nThe loop could not run ({kind}): {exc}\n"
 
 
-def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[str]]:
-    """Run the loop on every recording of ``dataset``; returns the summary lines and the failures."""
-    lines, failures = [], []
+def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[str], dict]:
+    """Run the loop on every recording of ``dataset``; returns the summary lines, the failures and the results
+    (label -> LoopResult) of the recordings that succeeded."""
+    lines, failures, results = [], [], {}
     try:
         recordings = _recordings(dataset, args.data)
     except (ValueError, OSError) as exc:
-        return [f"| {dataset} | could not be read: {exc} | | |"], [f"{dataset}: {exc}"]
+        return [f"| {dataset} | could not be read: {exc} | | |"], [f"{dataset}: {exc}"], results
     for label, read in recordings:
         started = time.time()
         sub = folder / label
@@ -99,21 +101,30 @@ def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[s
             failures.append(f"{dataset} / {label}: {exc}")
             print(f"{dataset} {label}: FAILED: {exc}", flush=True)
             continue
+        results[label] = result
         lines.append(_summary_line(f"[{label}]({label}/report.md)", doc))
         print(f"{dataset} {label}: done in {time.time() - started:.1f} s", flush=True)
-    return lines, failures
+    return lines, failures, results
+
+
+def _run_held_out(dataset: str, folder: Path, results: dict) -> list[str]:
+    """The held-out prediction rows (:mod:`gaitsim.loop.transfer`) of ``dataset`` into ``folder``/held_out.json;
+    returns the README table lines."""
+    rows = transfer.prediction_table(results, log=lambda m: print(f"  [{dataset}] {m}", flush=True))
+    write_json(folder / "held_out.json", rows)
+    return transfer.markdown_rows(dataset, rows)
 
 
 def _run_blind(folder: Path) -> list[str]:
     """The blind table (:mod:`gaitsim.loop.blind`) of every sensor into ``folder``/blind.md and blind.json."""
     rows, summary = [], []
     for sensor in blind.SENSORS:
-        untouched = blind.named_effects(blind.run(sensor, None))
-        print(f"blind {sensor} untouched: {untouched}", flush=True)
+        untouched = blind.run(sensor, None)
+        print(f"blind {sensor} untouched: {blind.named_effects(untouched)}", flush=True)
         found = []
         for case in blind.CASES:
-            row = {"sensor": sensor, "untouched_named": untouched, **blind.verdict(case, blind.run(sensor, case),
-                                                                                   untouched)}
+            row = {"sensor": sensor, "untouched_named": blind.named_effects(untouched),
+                   **blind.verdict(case, blind.run(sensor, case), untouched)}
             rows.append(row)
             found.append(row["found"])
             print(f"blind {sensor} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
@@ -126,8 +137,8 @@ def _run_blind(folder: Path) -> list[str]:
         "|---|---|---|---|---|---|"]
     for r in rows:
         named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
-        if r["unexplained_residuals"]:
-            named += f"; unexplained: {', '.join(r['unexplained_residuals'])}"
+        if r["unexplained_beyond_untouched"]:
+            named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
         lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
                      f"{shown(r['expected_magnitude'])} | {named} | {'yes' if r['found'] else 'no'} |")
     lines += ["", "Named on the untouched recordings (subtracted): " + "; ".join(
@@ -149,7 +160,7 @@ def run(args) -> int:
         raise RecordingError(f"loop: {args.dataset!r} is neither a dataset ({', '.join(CHOICES)}) nor a recording "
                              "folder")
     targets = list(DATASETS) + ["blind"] if args.dataset == "all" else [args.dataset]
-    failures, recordings = [], 0
+    failures, recordings, held_out = [], 0, []
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
         lines = ["# Sim-to-real loop results", "", f"Regenerate with `gaitsim loop {args.dataset} --out DIR`.", "",
                  "| recording | residual -> effect (fitted) | navigation metric (measured) | "
@@ -161,10 +172,17 @@ def run(args) -> int:
             if target == "blind":
                 found, failed = _run_blind(folder), []
             else:
-                found, failed = _run_recordings(target, folder, args)
+                found, failed, results = _run_recordings(target, folder, args)
+                if len(results) > 1:
+                    held_out += _run_held_out(target, folder, results)
             recordings += len(found)
             failures += failed
             lines += [line.replace("](", f"]({prefix}", 1) for line in found]
+        if held_out:
+            lines += ["", "## Held-out prediction", "", transfer.__doc__.strip(), "",
+                      "| dataset | effects of -> applied to | effects (alone: lowers the target's misfit?) | "
+                      "q_signature default -> transferred | better | navigation discrepancy default -> "
+                      "transferred |", "|---|---|---|---|---|---|"] + held_out
         if failures:
             lines += ["", f"**{len(failures)} recording(s) failed:**", ""] + [f"- {f}" for f in failures]
         (tmp / "README.md").write_text("\n".join(lines) + "\n")
