@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from nav.files import atomic_output_dir, write_json
@@ -47,6 +48,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--distance", type=float, default=None, metavar="M",
                    help="walked distance (m) of a recording folder, compared with the navigated length")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--jobs", type=int, default=1,
+                   help="datasets of 'all' run side by side in this many processes (default 1; results do not "
+                        "depend on it)")
     p.set_defaults(func=run)
 
 
@@ -147,10 +151,22 @@ def _run_blind(folder: Path) -> list[str]:
     return [f"| [blind tests](blind.md) | {'; '.join(summary)} | | |"]
 
 
+def _run_target(target: str, folder: Path, args) -> tuple[list[str], list[str], list[str]]:
+    """One target of the command (a dataset, ``blind`` or a recording folder) into ``folder``: its summary lines,
+    failures and held-out table lines."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if target == "blind":
+        return _run_blind(folder), [], []
+    found, failed, results = _run_recordings(target, folder, args)
+    return found, failed, (_run_held_out(target, folder, results) if len(results) > 1 else [])
+
+
 def run(args) -> int:
     """Run the loop as the command line asked; returns the exit code (1 when any recording failed)."""
     if args.rounds < 1:
         raise ValueError(f"--rounds {args.rounds}: must be >= 1")
+    if args.jobs < 1:
+        raise ValueError(f"--jobs {args.jobs}: must be >= 1")
     if args.axes is not None:
         parse_axes(args.axes)  # a malformed map is refused before anything runs
     if args.distance is not None and args.dataset in CHOICES:
@@ -165,18 +181,17 @@ def run(args) -> int:
         lines = ["# Sim-to-real loop results", "", f"Regenerate with `gaitsim loop {args.dataset} --out DIR`.", "",
                  "| recording | residual -> effect (fitted) | navigation metric (measured) | "
                  "predicted-vs-measured discrepancy before -> after |", "|---|---|---|---|"]
-        for target in targets:
-            folder = tmp / target if len(targets) > 1 else tmp
-            folder.mkdir(parents=True, exist_ok=True)
+        folders = [tmp / target if len(targets) > 1 else tmp for target in targets]
+        if args.jobs > 1 and len(targets) > 1:
+            with ProcessPoolExecutor(min(args.jobs, len(targets))) as pool:
+                outcomes = list(pool.map(_run_target, targets, folders, [args] * len(targets)))
+        else:
+            outcomes = [_run_target(target, folder, args) for target, folder in zip(targets, folders)]
+        for target, (found, failed, held) in zip(targets, outcomes):
             prefix = f"{target}/" if len(targets) > 1 else ""
-            if target == "blind":
-                found, failed = _run_blind(folder), []
-            else:
-                found, failed, results = _run_recordings(target, folder, args)
-                if len(results) > 1:
-                    held_out += _run_held_out(target, folder, results)
             recordings += len(found)
             failures += failed
+            held_out += held
             lines += [line.replace("](", f"]({prefix}", 1) for line in found]
         if held_out:
             lines += ["", "## Held-out prediction", "", transfer.__doc__.strip(), "",
