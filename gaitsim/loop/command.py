@@ -17,14 +17,17 @@ command exits 1. Written atomically: nothing appears at DIR when every recording
 
 from __future__ import annotations
 
+import os
 import time
 import warnings
 from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
 from pathlib import Path
 
 from nav.files import atomic_output_dir, write_json
 from nav.recording import RecordingError, list_runs, read_recording
 
+from ..experiments.runner import _die_with_parent, _start_method  # the runner's pool rules: no fork, no orphans
 from ..measured import load_dataset
 from ..numbers import shown
 from . import attribution, blind, report, settings, transfer
@@ -183,7 +186,8 @@ def run(args) -> int:
                  "predicted-vs-measured discrepancy before -> after |", "|---|---|---|---|"]
         folders = [tmp / target if len(targets) > 1 else tmp for target in targets]
         if args.jobs > 1 and len(targets) > 1:
-            with ProcessPoolExecutor(min(args.jobs, len(targets))) as pool:
+            with ProcessPoolExecutor(min(args.jobs, len(targets)), mp_context=get_context(_start_method()),
+                                     initializer=_die_with_parent, initargs=(os.getpid(),)) as pool:
                 outcomes = list(pool.map(_run_target, targets, folders, [args] * len(targets)))
         else:
             outcomes = [_run_target(target, folder, args) for target, folder in zip(targets, folders)]

@@ -19,7 +19,7 @@ re-run the sensor model on the cached walk).
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one diagonal entry 1 + s | % | stride closure, gyro profiles, navigation |
 | accel_scale_x, _y, _z | [sensor] accel_misalignment, one diagonal entry 1 + s | % | stride closure, rest_acc_norm, acc profiles, navigation |
-| g_sensitivity | [sensor] gyro_g_sensitivity = k I | deg/s/(m/s^2) | stride closure tilt, navigation |
+| g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
 
 The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, time and
@@ -147,6 +147,15 @@ def _scaled_axis(matrix, axis: int, percent: float) -> list:
     return out.tolist()
 
 
+def _g_sensitivity_changes(magnitude: float, ctx: dict) -> dict:
+    """G_g raised by ``magnitude`` (deg/s per m/s^2) on every axis, and the twin's gyro bias lowered by what that
+    adds at rest (``magnitude`` times the rest specific force): the bias was measured on the recording at rest,
+    where its g-sensitivity already acts, so the twin's rest reading must stay the recording's."""
+    g_sensitivity = np.asarray(ctx["gyro_g_sensitivity"]) + np.eye(3) * magnitude
+    bias = np.asarray(ctx["gyro_bias_rad_s"]) - math.radians(magnitude) * np.asarray(ctx["rest_specific_force"])
+    return _sensor(gyro_g_sensitivity=[g_sensitivity.tolist(), "deg/s/(m/s^2)"], gyro_bias=[bias.tolist(), "rad/s"])
+
+
 LIBRARY: tuple[Effect, ...] = (
     Effect("stance_creep", "forward creep of the foot during foot flat (stance micro-motion magnitude)",
            "[micromotion] creep_velocity_mps", "m/s", ("stance_velocity", "nav_length_ratio"), (-0.02, 0.06),
@@ -193,10 +202,10 @@ LIBRARY: tuple[Effect, ...] = (
       for sensor, label, profiles, extra in (("gyro", "gyro", GYR_PROFILES, ()),
                                              ("accel", "accelerometer", ACC_PROFILES, ("rest_acc_norm",)))
       for i, axis in enumerate("xyz")),
-    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's)",
-           "[sensor] gyro_g_sensitivity", "deg/s/(m/s^2)", ("closure_roll", "closure_pitch") + NAV, (-0.05, 0.05),
-           lambda m, ctx: _sensor(gyro_g_sensitivity=[(np.asarray(ctx["gyro_g_sensitivity"]) + np.eye(3) * m).tolist(),
-                                                      "deg/s/(m/s^2)"])),
+    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's; the "
+           "twin's gyro bias, found at rest where the g-sensitivity acts too, loses k times the rest specific force)",
+           "[sensor] gyro_g_sensitivity, gyro_bias", "deg/s/(m/s^2)", ("closure_roll", "closure_pitch") + NAV,
+           (-0.05, 0.05), _g_sensitivity_changes),
     Effect("saturation", "accelerometer range limit (clipping)", "[sensor] accel_range", "m/s^2",
            ("acc_peak", "hf40", "hf80", "onset_hf") + ACC_PROFILES, (20.0, 400.0),
            lambda m, ctx: _sensor(accel_range=[m, "m/s^2"]),
@@ -237,6 +246,7 @@ def clipped_runs(acc: np.ndarray) -> int:
 
 def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signature) -> dict:
     """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
+    mean specific force (m/s^2, sensor frame) over the detected stances, the twin's gyro bias (rad/s),
     the twin's current creep, stance rotation, roll rate, IMU site (m, foot frame) and sensor roll/pitch on
     the foot (rad), and the stance rotation (deg/s, foot frame) that closes the core-stance rate residual (the
     twin's, plus the residual turned from the sensor into the foot frame by the twin's mounting misalignment).
@@ -263,7 +273,10 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
             **{key: (np.asarray(twin.sensor[key]) if twin.sensor is not None else np.eye(3)).tolist()
                for key in ("gyro_misalignment", "accel_misalignment")},
             "gyro_g_sensitivity": np.degrees(np.asarray(twin.sensor["gyro_g_sensitivity"])
-                                             if twin.sensor is not None else np.zeros((3, 3))).tolist()}
+                                             if twin.sensor is not None else np.zeros((3, 3))).tolist(),
+            "gyro_bias_rad_s": (np.asarray(twin.sensor["gyro_bias"]) if twin.sensor is not None
+                                else np.zeros(3)).tolist(),
+            "rest_specific_force": rec.acc[measured.stationary].mean(0).tolist()}
 
 
 def applicable(effect: Effect, ctx: dict) -> bool:
