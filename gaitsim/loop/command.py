@@ -10,9 +10,9 @@ a recording whose frame is not x toes, y left, z up is refused with the map to u
 
 Every recording's folder gets ``report.md``, ``attribution.json``, ``twin.toml`` (the fitted twin, which
 ``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A dataset of several recordings also
-gets the held-out prediction (:mod:`gaitsim.loop.transfer`): ``held_out.json`` and a table in the summary. A recording the loop cannot use is a
-failure: its folder holds a ``report.md`` saying why, the summary lists it, the other recordings go on, and the
-command exits 1. Written atomically: nothing appears at DIR when every recording failed.
+gets the held-out prediction (:mod:`gaitsim.loop.transfer`): ``held_out.json`` and a table in the summary. A
+recording the loop cannot use is a failure: its folder holds a ``report.md`` saying why, the summary lists it,
+the other recordings go on, and the command exits 1. Written atomically: nothing appears at DIR when every recording failed.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[s
         sub.mkdir(parents=True)
         try:
             result = attribution.run_loop(read(), max_rounds=args.rounds, axis_map=args.axes, distance_m=args.distance,
-                                          log=lambda m, lab=label: print(f"  [{lab}] {m}", flush=True))
+                                          log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True))
             doc = report.write_result(result, sub, f"{dataset} / {label}")
         except Exception as exc:  # noqa: BLE001 -- any failure of one recording is reported, the others go on
             (sub / "report.md").write_text(_failure_report(f"{dataset} / {label}", exc))
