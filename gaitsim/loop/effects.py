@@ -15,10 +15,10 @@ re-run the sensor model on the cached walk).
 | bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
-| accel_scale | [sensor] accel_misalignment = (1 + s) I | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
+| accel_scale | [sensor] accel_misalignment = (1 + s) x the twin's | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
-| gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one diagonal entry 1 + s | % | stride closure, gyro profiles, navigation |
-| accel_scale_x, _y, _z | [sensor] accel_misalignment, one diagonal entry 1 + s | % | stride closure, rest_acc_norm, acc profiles, navigation |
+| gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
+| accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
 | g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
 
@@ -141,9 +141,10 @@ def _sensor(**items) -> dict:
 
 
 def _scaled_axis(matrix, axis: int, percent: float) -> list:
-    """The twin's 3x3 sensor matrix with its ``axis`` diagonal entry set to 1 + ``percent`` / 100."""
+    """The twin's 3x3 sensor matrix with the output of its ``axis`` (that row) scaled by 1 + ``percent`` / 100:
+    a scale error of that axis on top of what the twin already has (an equal scale named before included)."""
     out = np.array(matrix, float)
-    out[axis, axis] = 1.0 + percent / 100.0
+    out[axis] *= 1.0 + percent / 100.0
     return out.tolist()
 
 
@@ -194,7 +195,8 @@ LIBRARY: tuple[Effect, ...] = (
     Effect("accel_scale", "accelerometer scale factor error, equal on the three axes",
            "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES + CLOSURE,
            (-5.0, 5.0),
-           lambda m, ctx: _sensor(accel_misalignment=[(np.eye(3) * (1.0 + m / 100.0)).tolist(), "1"]),
+           lambda m, ctx: _sensor(accel_misalignment=[(np.asarray(ctx["accel_misalignment"]) * (1.0 + m / 100.0))
+                                                      .tolist(), "1"]),
            _scale_guess),
     *(Effect(f"{sensor}_scale_{axis}", f"{label} scale factor error of the sensor's {axis} axis alone",
              f"[sensor] {sensor}_misalignment[{i}][{i}]", "%", CLOSURE + profiles + NAV + extra, (-6.0, 6.0),
