@@ -377,15 +377,20 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
             f"fn {fn!r} cannot be pickled for the worker processes ({exc}); define it at the top level of an "
             "importable module, or pass workers=1 to run in this process"
         ) from exc
-    context = multiprocessing.get_context(_start_method())
-    with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start_worker,
-                                                initargs=(os.getpid(),)) as pool:
+    with process_pool(workers) as pool:
         futures = {pool.submit(_execute, fn, tasks[index]): index for index in pending}
         try:
             for future in concurrent.futures.as_completed(futures):
                 yield futures[future], *_future_outcome(future)
         finally:
             pool.shutdown(wait=False, cancel_futures=True)
+
+
+def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
+    """A local pool of ``workers`` processes under the runner's rules: never forked from a parent holding numba or
+    MuJoCo state, one numba thread each, none outliving the process that started it."""
+    return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(
+        _start_method()), initializer=_start_worker, initargs=(os.getpid(),))
 
 
 def _start_worker(parent_pid: int) -> None:
