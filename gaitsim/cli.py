@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from nav import command as nav_command
 
-from .errors import ScenarioError
 from .experiments import command as experiments_command
+from .experiments.runner import RunsFailedError
 from .loop import command as loop_command
+from .ranges import check_value
 from .scenario import load_scenario
 from .simulate import generate, summary
 
@@ -19,6 +21,10 @@ SUBCOMMANDS = (nav_command, experiments_command, loop_command)
 
 def _generate(args) -> int:
     scenario = load_scenario(args.scenario)
+    if args.seed is not None:
+        check_value("scenario", "seed", args.seed, "gaitsim generate --seed")
+    if args.runs is not None:
+        check_value("scenario", "runs", args.runs, "gaitsim generate --runs")
     recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force)
     print(summary(recs[0]))
     if len(recs) > 1:
@@ -43,14 +49,37 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+EXIT_INPUT = 2  # bad input: scenario, recording, options or output path (the message says which)
+EXIT_RUNS_FAILED = 3  # some Monte Carlo runs failed; the others are stored for the next call
+EXIT_INTERNAL = 4  # a bug: an exception no input check anticipated (traceback with GAITSIM_DEBUG=1)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one subcommand; every failure ends in one message on stderr and a non-zero exit code, never a
+    traceback (set the environment variable GAITSIM_DEBUG=1 to see the traceback of an internal error)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ScenarioError, FileExistsError, FileNotFoundError, ValueError) as exc:
+    except RunsFailedError as exc:
         print(f"gaitsim {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_RUNS_FAILED
+    except (ValueError, OSError) as exc:  # ScenarioError and RecordingError are ValueErrors
+        print(f"gaitsim {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except MemoryError:
+        print(f"gaitsim {args.command}: error: out of memory; use a shorter walk, a lower rate or fewer runs",
+              file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"gaitsim {args.command}: interrupted; nothing was written to the output", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal error: still one line, and a non-zero exit code
+        if os.environ.get("GAITSIM_DEBUG"):
+            raise
+        print(f"gaitsim {args.command}: internal error (a bug; please report it with GAITSIM_DEBUG=1 output): "
+              f"{type(exc).__name__}: {exc}", file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

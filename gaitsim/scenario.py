@@ -21,6 +21,13 @@ Sections and keys (every key optional unless marked; units in the key names):
 ``[nav]``, ``[experiment]``, ``[targets]``  kept as tables for the filter and the experiment runner (which
                 validates them; ``[targets]`` holds the numbers a reproduction is measured against).
 
+Every number must be finite and inside its physical range (:mod:`gaitsim.ranges`, tabulated in
+``docs/scenario-ranges.md``); then the rules between keys hold: the phase fractions add up to 1, the swing
+fits (mean foot speed <= MAX_SWING_SPEED), the slap, heel strike and stance pulses fit their phases, ringing
+lies below the Nyquist frequency, the sensor's jitter, skew, clock error and bandwidths suit the sample rate,
+and one run stays below MAX_SAMPLES samples (estimated before anything is allocated). Rules over several keys
+are named after the key the user wrote.
+
 Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
 key, the value and what is allowed; nothing is written.
 """
@@ -38,6 +45,7 @@ import numpy as np
 from nav.constants import DEFAULT_GRAVITY
 
 from .errors import ScenarioError
+from .ranges import check_ranges, check_value
 from .imu.config import changed_sensor, sensor_from_table, sensor_table
 from .imu.model import SensorSpec
 from .world import path as paths
@@ -58,6 +66,14 @@ IN_DEGREES = {
 WORLD_SECTIONS = {"gait": GaitParams, "impact": ImpactParams, "micromotion": MicroMotionParams, "mount": Mount}
 WRITTEN_DIGITS = 15  # significant digits of a converted value written back (the deg -> rad -> deg round trip is
 # exact to them)
+
+MAX_SWING_SPEED = 10.0  # m/s, mean foot speed over the swing (stride / swing time); sprinting feet reach ~2x this at peak
+MAX_STRIDE_SD_SHARE = 0.25  # stride-to-stride spread of the stride length, share of the stride (4 sd stay > 0)
+RADIUS_ROUNDING = 1e-9  # relative: a radius of exactly one step survives the rounding of a path's geometry
+MAX_SAMPLES = 5_000_000  # samples of one run (~1.7 h at 800 Hz; ~0.7 kB of memory per sample while simulating)
+MAX_JITTER_SHARE = 0.1  # timestamp jitter std, share of the sample period (10 sd apart: timestamps never reorder)
+MAX_SKEW_S = 0.05  # s, accelerometer-gyro skew (the skewed channel loses this much data at each end)
+MAX_CLOCK_ERROR = 0.01  # relative clock error (10,000 ppm; crystals are off by < 100 ppm)
 
 PATH_KEYS = {
     "straight": {"kind", "length_m", "yaw_deg", "start_m"},
@@ -165,9 +181,11 @@ def section_table(obj, digits: int | None = WRITTEN_DIGITS) -> dict:
     return out
 
 
-def _in_key_units(obj, key: str):
-    """Value of scenario key ``key`` of ``obj`` in the key's unit (for error messages)."""
-    return section_table(obj)[key]
+def _checked(where: str, section: str, key: str, value, default):
+    """``value`` coerced to the type of ``default`` (:func:`_check_type`) and checked against its range."""
+    value = _check_type(where, key, value, default)
+    check_value(section, key, value, where)
+    return value
 
 
 def _require(cond: bool, where: str, key: str, value, allowed: str):
@@ -175,53 +193,72 @@ def _require(cond: bool, where: str, key: str, value, allowed: str):
         raise ScenarioError(f"{where}: {key} = {value!r} is not allowed; {allowed}")
 
 
-def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where: str) -> None:
+def _blamed(where: str, keys: dict, written: frozenset, allowed: str) -> ScenarioError:
+    """The error of a rule over several keys (``{key: value in its unit}``), named after the first key of them
+    the user wrote (``written``: keys as given in the file), the others shown as context."""
+    first = next((k for k in keys if k in written), next(iter(keys)))
+    others = ", ".join(f"{k} = {v!r}" for k, v in keys.items() if k != first)
+    return ScenarioError(f"{where}: {first} = {keys[first]!r}{f' (with {others})' if others else ''} is not "
+                         f"allowed; {allowed}")
+
+
+def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where: str,
+                  written: frozenset = frozenset()) -> None:
     """Physical plausibility of the gait, impact and micro-motion parameters (SI objects; errors name the
-    scenario keys and their values in the keys' units)."""
-    _require(g.cadence_steps_per_min > 0, f"{where} [gait]", "cadence_steps_per_min", g.cadence_steps_per_min, "must be > 0")
-    _require(g.stride_length_m > 0, f"{where} [gait]", "stride_length_m", g.stride_length_m, "must be > 0")
-    fracs = {k: getattr(g, k) for k in ("heel_rocker_frac", "foot_flat_frac", "push_off_frac", "swing_frac")}
-    for k, v in fracs.items():
-        _require(0 < v < 1, f"{where} [gait]", k, v, "must lie in (0, 1)")
-    total = sum(fracs.values())
-    _require(abs(total - 1) < 1e-9, f"{where} [gait]", "phase fractions", total,
-             "heel_rocker_frac + foot_flat_frac + push_off_frac + swing_frac must add up to 1")
-    for key, value in (("stride_length_sd_m", g.stride_length_sd_m), ("cycle_sd_frac", g.cycle_sd_frac),
-                       ("pitch_sd_deg", g.pitch_sd), ("swing_height_m", g.swing_height_m)):
-        _require(value >= 0, f"{where} [gait]", key, _in_key_units(g, key), "must be >= 0")
-    for k in ("stand_start_s", "stand_end_s"):
-        _require(getattr(g, k) >= 0.5, f"{where} [gait]", k, getattr(g, k), "must be >= 0.5 s (the filter aligns on it)")
-    _require(g.pitch_heel_strike < 0, f"{where} [gait]", "pitch_heel_strike_deg", _in_key_units(g, "pitch_heel_strike_deg"),
-             "must be < 0 (toes up at heel strike)")
-    _require(g.pitch_toe_off > 0, f"{where} [gait]", "pitch_toe_off_deg", _in_key_units(g, "pitch_toe_off_deg"),
-             "must be > 0 (heel up)")
-    _require(g.cycle_sd_frac < 0.2, f"{where} [gait]", "cycle_sd_frac", g.cycle_sd_frac, "must be < 0.2")
+    scenario keys and their values in the keys' units).
+
+    Every value is first checked alone against its range (:mod:`gaitsim.ranges`), so a rule over several keys
+    only ever sees finite, plausible values; ``written`` (scenario keys the user gave) decides which key a rule
+    over several keys is named after.
+    """
+    tables = {"gait": section_table(g), "impact": section_table(imp), "micromotion": section_table(mm)}
+    for section, table in tables.items():
+        check_ranges(section, table, f"{where} [{section}]")
+    gait, impact, micro = tables["gait"], tables["impact"], tables["micromotion"]
+    fracs = ("heel_rocker_frac", "foot_flat_frac", "push_off_frac", "swing_frac")
+    total = sum(getattr(g, k) for k in fracs)
+    if abs(total - 1) > 1e-9:
+        raise _blamed(f"{where} [gait]", {k: gait[k] for k in fracs}, written,
+                      f"the phase fractions must add up to 1 (they add up to {total:.6g})")
+    swing_s = g.swing_frac * g.cycle_s
+    swing_speed = g.stride_length_m / swing_s
+    if swing_speed > MAX_SWING_SPEED:
+        raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("swing_frac", "stride_length_m", "cadence_steps_per_min")},
+                      written, f"the foot would cover the stride in {swing_s:.3g} s of swing at a mean "
+                               f"{swing_speed:.3g} m/s; at most {MAX_SWING_SPEED} m/s (a sprinting foot)")
+    if g.stride_length_sd_m > MAX_STRIDE_SD_SHARE * g.stride_length_m:
+        raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("stride_length_sd_m", "stride_length_m")}, written,
+                      f"the stride-to-stride spread must be at most {MAX_STRIDE_SD_SHARE:.0%} of the stride")
     rocker = g.heel_rocker_frac * g.cycle_s
-    _require(0 < imp.slap_duration_s < 0.8 * rocker, f"{where} [impact]", "slap_duration_s", imp.slap_duration_s,
-             f"must be > 0 and < 80% of the heel rocker ({rocker:.3f} s)")
-    _require(0 < imp.heel_strike_duration_s < rocker - imp.slap_duration_s, f"{where} [impact]",
-             "heel_strike_duration_s", imp.heel_strike_duration_s, "must be > 0 and end before the forefoot slap")
-    _require(imp.slap_rate >= 0, f"{where} [impact]", "slap_rate_dps", _in_key_units(imp, "slap_rate_dps"), "must be >= 0")
-    _require(imp.ringing_hz >= 0, f"{where} [impact]", "ringing_hz", imp.ringing_hz, "must be >= 0 (0 = off)")
-    _require(0 < imp.ringing_damping < 1, f"{where} [impact]", "ringing_damping", imp.ringing_damping, "must lie in (0, 1)")
+    if not imp.slap_duration_s < 0.8 * rocker:
+        raise _blamed(f"{where} [impact]", {"slap_duration_s": impact["slap_duration_s"],
+                                            "heel_rocker_frac": gait["heel_rocker_frac"],
+                                            "cadence_steps_per_min": gait["cadence_steps_per_min"]}, written,
+                      f"the slap must be shorter than 80% of the heel rocker ({rocker:.3f} s)")
+    if not imp.heel_strike_duration_s < rocker - imp.slap_duration_s:
+        raise _blamed(f"{where} [impact]", {"heel_strike_duration_s": impact["heel_strike_duration_s"],
+                                            "slap_duration_s": impact["slap_duration_s"],
+                                            "heel_rocker_frac": gait["heel_rocker_frac"]}, written,
+                      "the heel strike must end before the forefoot slap")
     if imp.ringing_hz > 0:
         _require(imp.ringing_hz >= 5, f"{where} [impact]", "ringing_hz", imp.ringing_hz,
-                 "must be >= 5 Hz (the ringing must die out within the stance)")
-    for k in ("creep_ramp_s", "settle_duration_s", "heel_off_duration_s"):
-        _require(getattr(mm, k) > 0, f"{where} [micromotion]", k, getattr(mm, k), "must be > 0")
+                 "must be 0 (off) or >= 5 Hz (the ringing must die out within the stance)")
     push = g.push_off_frac * g.cycle_s
-    _require(mm.creep_ramp_s < min(rocker, push), f"{where} [micromotion]", "creep_ramp_s", mm.creep_ramp_s,
-             f"must be shorter than the heel rocker and push-off ({min(rocker, push):.3f} s)")
-    _require(mm.heel_off_duration_s / 2 < push, f"{where} [micromotion]", "heel_off_duration_s",
-             mm.heel_off_duration_s, "half of it must fit into the push-off")
-    _require(all(0.0 <= f <= 1.0 for f in mm.stance_rotation_pivot_frac), f"{where} [micromotion]",
-             "stance_rotation_pivot_frac", list(mm.stance_rotation_pivot_frac),
-             "both (pitch, yaw) pivots must lie in [0, 1] (0 = heel contact, 1 = toe contact)")
+    if not mm.creep_ramp_s < min(rocker, push):
+        raise _blamed(f"{where} [micromotion]", {"creep_ramp_s": micro["creep_ramp_s"],
+                                                 "heel_rocker_frac": gait["heel_rocker_frac"],
+                                                 "push_off_frac": gait["push_off_frac"]}, written,
+                      f"the creep ramp must be shorter than the heel rocker and push-off ({min(rocker, push):.3f} s)")
+    if not mm.heel_off_duration_s / 2 < push:
+        raise _blamed(f"{where} [micromotion]", {"heel_off_duration_s": micro["heel_off_duration_s"],
+                                                 "push_off_frac": gait["push_off_frac"]}, written,
+                      f"half of the heel-off pulse must fit into the push-off ({push:.3f} s)")
     flat = g.foot_flat_frac * g.cycle_s
-    if any(mm.stance_rotation_rate):
-        _require(2 * mm.creep_ramp_s < flat, f"{where} [micromotion]", "stance_rotation_dps",
-                 _in_key_units(mm, "stance_rotation_dps"), f"needs a foot flat ({flat:.3f} s) longer than two creep ramps "
-                                                    f"(2 x creep_ramp_s = {2 * mm.creep_ramp_s:.3f} s)")
+    if any(mm.stance_rotation_rate) and not 2 * mm.creep_ramp_s < flat:
+        raise _blamed(f"{where} [micromotion]", {"stance_rotation_dps": micro["stance_rotation_dps"],
+                                                 "creep_ramp_s": micro["creep_ramp_s"],
+                                                 "foot_flat_frac": gait["foot_flat_frac"]}, written,
+                      f"a stance rotation needs a foot flat ({flat:.3f} s) longer than two creep ramps")
 
 
 def build_path(table: dict, gait: GaitParams, where: str):
@@ -231,15 +268,15 @@ def build_path(table: dict, gait: GaitParams, where: str):
     for key in table:
         if key not in PATH_KEYS[kind]:
             raise ScenarioError(f"{where}: unknown key {key!r} for kind {kind!r}; allowed: {', '.join(sorted(PATH_KEYS[kind]))}")
-    num = lambda key, default=None: _check_type(where, key, table.get(key, default), 0.0)  # noqa: E731
-    step = gait.stride_length_m / 2
+    num = lambda key, default=None: _checked(where, "path", key, table.get(key, default), 0.0)  # noqa: E731
+    step = gait.stride_length_m / 2 * (1 - RADIUS_ROUNDING)
     if kind == "static":
         _require("duration_s" in table, where, "duration_s", None, "required for kind 'static'")
         d = num("duration_s")
         _require(d > 0, where, "duration_s", d, "must be > 0")
         return None, d
     if kind in ("straight", "arc"):
-        start = _check_type(where, "start_m", table.get("start_m", [0.0, 0.0]), (0.0, 0.0))
+        start = _checked(where, "path", "start_m", table.get("start_m", [0.0, 0.0]), (0.0, 0.0))
         yaw = np.deg2rad(num("yaw_deg", 0.0))
     if kind == "straight":
         _require("length_m" in table, where, "length_m", None, "required for kind 'straight'")
@@ -259,6 +296,7 @@ def build_path(table: dict, gait: GaitParams, where: str):
     ok = isinstance(pts, list) and len(pts) >= 2 and all(
         isinstance(p, list) and len(p) == 2 and all(_is_number(x) for x in p) for p in pts)
     _require(ok, where, "waypoints_m", pts, "must be a list of at least two [x, y] points (m)")
+    check_value("path", "waypoints_m", pts, where)
     radius = num("corner_radius_m", 1.0)
     _require(radius >= step, where, "corner_radius_m", radius, f"a turn radius must be at least one step ({step} m)")
     w = np.array(pts, float)
@@ -286,15 +324,14 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     for key in head:
         _require(key in allowed, f"{source} [scenario]", key, head[key], f"unknown key; allowed: {', '.join(sorted(allowed))}")
     name = _check_type(f"{source} [scenario]", "name", head.get("name", Path(source).stem), "")
-    seed = _check_type(f"{source} [scenario]", "seed", head.get("seed", 0), 0)
-    runs = _check_type(f"{source} [scenario]", "runs", head.get("runs", 1), 0)
-    _require(seed >= 0, f"{source} [scenario]", "seed", seed, "must be >= 0")
-    _require(runs >= 1, f"{source} [scenario]", "runs", runs, "must be >= 1")
+    seed = _checked(f"{source} [scenario]", "scenario", "seed", head.get("seed", 0), 0)
+    runs = _checked(f"{source} [scenario]", "scenario", "runs", head.get("runs", 1), 0)
+    written = frozenset(key for section in doc.values() for key in section)
 
     gait = fill(GaitParams, doc.get("gait", {}), f"{source} [gait]")
     impact = fill(ImpactParams, doc.get("impact", {}), f"{source} [impact]")
     micro = fill(MicroMotionParams, doc.get("micromotion", {}), f"{source} [micromotion]")
-    validate_gait(gait, impact, micro, source)
+    validate_gait(gait, impact, micro, source, written)
     mount = _mount(doc.get("mount", {}), Mount(), source)
     rate, gravity = _sampling(doc.get("sampling", {}), 800.0, DEFAULT_GRAVITY, source)
 
@@ -302,17 +339,65 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
         raise ScenarioError(f"{source}: missing section [path] (kind = straight | arc | polyline | static)")
     path, duration = build_path(doc["path"], gait, f"{source} [path]")
     sensor = sensor_from_table(doc["sensor"], where=f"{source} [sensor]") if "sensor" in doc else None
+    walk = Walk(path=path, gait=gait, impact=impact, micro=micro, duration_s=duration)
+    validate_sampling(walk, rate, sensor, source, written)
     return Scenario(
-        name=name, walk=Walk(path=path, gait=gait, impact=impact, micro=micro, duration_s=duration),
-        mount=mount, rate_hz=rate, gravity=gravity, seed=seed, runs=runs,
+        name=name, walk=walk, mount=mount, rate_hz=rate, gravity=gravity, seed=seed, runs=runs,
         description=_check_type(f"{source} [scenario]", "description", head.get("description", ""), ""),
         path_table=dict(doc["path"]), sensor=sensor, nav=dict(doc.get("nav", {})),
         experiment=dict(doc.get("experiment", {})), targets=dict(doc.get("targets", {})), source=source,
     )
 
 
+def expected_samples(walk: Walk, rate_hz: float) -> int:
+    """Samples of one run of ``walk`` at ``rate_hz``, estimated from the path and the gait before anything is
+    allocated (an upper bound: every cycle 4 sd long, one extra stride)."""
+    g = walk.gait
+    if walk.path is None:
+        return int(math.ceil(walk.duration_s * rate_hz)) + 1
+    strides = max(1, round(walk.path.length / g.stride_length_m)) + 1
+    duration = g.stand_start_s + g.stand_end_s + strides * g.cycle_s * (1 + 4 * g.cycle_sd_frac)
+    return int(math.ceil(duration * rate_hz)) + 1
+
+
+def validate_sampling(walk: Walk, rate_hz: float, sensor: SensorSpec | None, source: str,
+                      written: frozenset = frozenset()) -> None:
+    """Rules between the walk, the sample rate and the sensor: the size of a run, ringing below the Nyquist
+    frequency, and the sensor's timing terms and bandwidths against the sample period."""
+    samples = expected_samples(walk, rate_hz)
+    if samples > MAX_SAMPLES:
+        size = ({"duration_s": walk.duration_s} if walk.path is None else
+                {"length_m": round(walk.path.length, 6), "stride_length_m": walk.gait.stride_length_m})
+        raise _blamed(f"{source} [path]", {**size, "rate_hz": rate_hz}, written,
+                      f"one run would hold about {samples:.3g} samples (~{samples * 0.7e-6:.3g} GB while simulated); "
+                      f"at most {MAX_SAMPLES:.3g}: shorten the walk or lower the rate")
+    nyquist = rate_hz / 2
+    if walk.impact.ringing_hz >= nyquist:
+        raise _blamed(f"{source} [impact]", {"ringing_hz": walk.impact.ringing_hz, "rate_hz": rate_hz}, written,
+                      f"the ringing must lie below the Nyquist frequency ({nyquist:g} Hz) to be sampled at all")
+    if sensor is None:
+        return
+    where = f"{source} [sensor]"
+    period = 1.0 / rate_hz
+    jitter = float(sensor["timestamp_jitter"])
+    _require(jitter <= MAX_JITTER_SHARE * period, where, "timestamp_jitter", f"{jitter:g} s",
+             f"must be at most {MAX_JITTER_SHARE:g} of the sample period ({MAX_JITTER_SHARE * period:g} s at "
+             f"{rate_hz:g} Hz): larger jitter reorders the timestamps")
+    skew = float(sensor["accel_gyro_skew"])
+    _require(abs(skew) <= MAX_SKEW_S, where, "accel_gyro_skew", f"{skew:g} s",
+             f"must lie within +-{MAX_SKEW_S:g} s (the skewed channel loses |skew| of data at each end)")
+    clock = float(sensor["clock_error"])
+    _require(abs(clock) <= MAX_CLOCK_ERROR, where, "clock_error", f"{clock:g}",
+             f"must lie within +-{MAX_CLOCK_ERROR:g} ({MAX_CLOCK_ERROR * 1e6:g} ppm)")
+    for key in ("accel_bandwidth", "gyro_bandwidth"):
+        bandwidth = float(sensor[key])
+        _require(not math.isfinite(bandwidth) or bandwidth < nyquist, where, key, f"{bandwidth:g} Hz",
+                 f"must lie below the Nyquist frequency ({nyquist:g} Hz at {rate_hz:g} Hz), or inf (off)")
+
+
 def _mount(table: dict, base: Mount, source: str) -> Mount:
     mount = fill(Mount, table, f"{source} [mount]", base)
+    check_ranges("mount", section_table(mount), f"{source} [mount]")
     _require(mount.site in MOUNTS, f"{source} [mount]", "site", mount.site, f"allowed: {', '.join(MOUNTS)}")
     return mount
 
@@ -322,8 +407,8 @@ def _sampling(table: dict, rate: float, gravity: float, source: str) -> tuple[fl
     for key in table:
         _require(key in ("rate_hz", "gravity_mps2"), f"{source} [sampling]", key, table[key],
                  "unknown key; allowed: gravity_mps2, rate_hz")
-    rate = _check_type(f"{source} [sampling]", "rate_hz", table.get("rate_hz", rate), 0.0)
-    gravity = _check_type(f"{source} [sampling]", "gravity_mps2", table.get("gravity_mps2", gravity), 0.0)
+    rate = _checked(f"{source} [sampling]", "sampling", "rate_hz", table.get("rate_hz", rate), 0.0)
+    gravity = _checked(f"{source} [sampling]", "sampling", "gravity_mps2", table.get("gravity_mps2", gravity), 0.0)
     _require(rate >= 50, f"{source} [sampling]", "rate_hz", rate, "must be >= 50 Hz")
     _require(gravity > 0, f"{source} [sampling]", "gravity_mps2", gravity, "must be > 0")
     return rate, gravity
@@ -346,9 +431,10 @@ def with_changes(scenario: Scenario, changes: dict, source: str = "<changes>") -
     gait = fill(GaitParams, changes.get("gait", {}), f"{source} [gait]", walk.gait)
     impact = fill(ImpactParams, changes.get("impact", {}), f"{source} [impact]", walk.impact)
     micro = fill(MicroMotionParams, changes.get("micromotion", {}), f"{source} [micromotion]", walk.micro)
-    validate_gait(gait, impact, micro, source)
+    written = frozenset(key for section in changes.values() if isinstance(section, dict) for key in section)
+    validate_gait(gait, impact, micro, source, written)
     if walk.path is not None:
-        step = gait.stride_length_m / 2
+        step = gait.stride_length_m / 2 * (1 - RADIUS_ROUNDING)
         _require(walk.path.min_radius >= step, f"{source} [path]", "turn radius", walk.path.min_radius,
                  f"a turn radius must be at least one step ({step} m)")
         _require(walk.path.length >= gait.stride_length_m, f"{source} [path]", "length", walk.path.length,
@@ -358,8 +444,9 @@ def with_changes(scenario: Scenario, changes: dict, source: str = "<changes>") -
     sensor = scenario.sensor
     if "sensor" in changes:
         sensor = changed_sensor(sensor, changes["sensor"], f"{source} [sensor]")
-    return dataclasses.replace(scenario, walk=dataclasses.replace(walk, gait=gait, impact=impact, micro=micro),
-                               mount=mount, rate_hz=rate, gravity=gravity, sensor=sensor)
+    walk = dataclasses.replace(walk, gait=gait, impact=impact, micro=micro)
+    validate_sampling(walk, rate, sensor, source, written)
+    return dataclasses.replace(scenario, walk=walk, mount=mount, rate_hz=rate, gravity=gravity, sensor=sensor)
 
 
 def scenario_document(scenario: Scenario) -> dict:

@@ -1,11 +1,18 @@
 """Bad-input checks on recordings: each problem is an error or a warning with counts, never silently fixed.
 
+One entry point, :func:`check_recording`, runs on any recording (simulated or measured, navigated or looped).
+
 Errors (raise :class:`nav.recording.RecordingError`): mismatched shapes, fewer than 2 samples, NaN or infinite
-samples, repeated or decreasing timestamps, an accelerometer that reads ~1 at rest (units of g), a gyro whose
-rates exceed any walking range (units of deg/s), no stance found by the detector.
-Warnings (returned in :class:`CheckReport` and issued with ``warnings.warn``): irregular sample intervals,
-static specific force far from gravity, a static gyro offset too large for rad/s, samples stuck at a column's
-extreme (possible clipping).
+samples, repeated or decreasing timestamps, and -- unless the caller allows them by name (``allow``, see
+:data:`ALLOWABLE`; ``gaitsim nav --allow NAME``) -- a sample rate outside 20 Hz..5 kHz (time in ms or us:
+read the recording with ``time_unit``, ``gaitsim nav --time-unit ms``), an accelerometer that reads ~1 at rest
+(units of g), a gyro whose rates exceed any walking range on more than a handful of samples (units of deg/s),
+and strides over which the gyro's attitude disagrees with the accelerometer's (a wrong gyro scale or unit, a
+flipped accelerometer). No stance found by the detector is an error too.
+Warnings (returned in :class:`CheckReport` with counts and issued with ``warnings.warn``): irregular sample
+intervals, gaps longer than :data:`GAP_PERIODS` sample periods, no rest at the start, static specific force far
+from gravity or not along +z, a static gyro offset too large for rad/s, a handful of gyro samples above any
+walking rate (glitches), flat tops at a column's extreme (clipping, at any range).
 """
 
 from __future__ import annotations
@@ -16,17 +23,31 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import quaternion as quat
+from .alignment import tilt_from_specific_force
 from .constants import DEFAULT_GRAVITY
-from .recording import Recording, RecordingError
+from .recording import IMU_COLUMNS, Recording, RecordingError, require_finite
+from .strapdown import integrate
 
 STATIC_WINDOW_S = 0.5  # s, length of the quietest window used for the unit checks
+RATE_RANGE_HZ = (20.0, 5000.0)  # sample rates of foot IMUs (60 Hz trackers to 1-4 kHz lab sensors)
 MAX_WALKING_RATE = 35.0  # rad/s (2000 deg/s, the top of common gyro ranges; walking peaks at 10-31 rad/s)
+MAX_GLITCH_SHARE = 0.001  # share of samples above MAX_WALKING_RATE still read as glitches, not as deg/s
 MAX_STATIC_RATE = 0.1  # rad/s (5.7 deg/s): a rad/s gyro at rest reads bias + noise, far below this
 ACC_IN_G_BAND = (0.8, 1.25)  # |f| at rest, if it lies here the accelerometer reports g
 GRAVITY_TOLERANCE = 0.1  # relative deviation of the static |f| from gravity that triggers a warning
 JITTER_TOLERANCE = 0.2  # relative deviation of an interval from the median interval counted as irregular
-CLIP_MIN_COUNT = 3  # samples at a column's extreme value that count as possible clipping
-CLIP_MIN_LEVEL = {"acc": 2 * DEFAULT_GRAVITY, "gyr": 5.0}  # m/s^2, rad/s: extremes below these are not a sensor range
+GAP_PERIODS = 5.0  # an interval longer than this many median intervals is a gap (lost samples)
+CLIP_MIN_RUN = 3  # consecutive samples sitting exactly at a column's extreme that count as a flat top
+CLIP_MIN_SPREAD = 20.0  # a flat top lies this many column standard deviations at rest away from the rest level
+REST_RATE = 0.6  # rad/s, |w| below which a sample may be at rest (the foot's stance roll-over stays below)
+REST_FORCE = 1.0  # m/s^2, ||f| - g| below which a sample may be at rest
+START_REST_S = 0.6  # s of rest expected at the start (the filter aligns on it; a walking stance is shorter)
+STRIDE_RANGE_S = (0.2, 3.0)  # s between two rests that count as one stride for the closure check
+MAX_CLOSURE_SPEED = 1.0  # m/s, median speed a stride ends with (gyro-carried attitude) that refuses gyro against
+# acc: clean recordings end at 0.1-0.46 m/s (simulated, gaitmap, UCR, x-io), a gyro scaled x2 at 1.5-7 m/s
+MIN_CLOSURE_STRIDES = 3  # strides needed before the closure check judges
+ALLOWABLE = ("rate", "units", "closure")  # refusals a caller may turn into warnings by name
 
 
 @dataclass
@@ -49,18 +70,15 @@ class CheckReport:
         self.counts.update(counts)
         warnings.warn(message, stacklevel=3)
 
-
-def _finite_check(name: str, columns: tuple[str, ...], values: np.ndarray) -> None:
-    bad = ~np.isfinite(values)
-    if bad.any():
-        per_col = {c: int(n) for c, n in zip(columns, bad.reshape(len(values), -1).sum(axis=0)) if n}
-        first = int(np.flatnonzero(bad.reshape(len(values), -1).any(axis=1))[0])
-        raise RecordingError(f"{name}: {int(bad.sum())} NaN/inf values (per column {per_col}; first at row {first}); "
-                             "all samples must be finite")
+    def refuse(self, allowed: bool, message: str, **counts) -> None:
+        """Raise ``message`` as a RecordingError, or, when the caller allowed the check, warn with it."""
+        if not allowed:
+            raise RecordingError(message)
+        self.warn(message + " (allowed by the caller)", **counts)
 
 
 def check_timestamps(t: np.ndarray, name: str = "imu.csv") -> dict:
-    """Raise on repeated or decreasing timestamps; return counts of irregular intervals (s)."""
+    """Raise on repeated or decreasing timestamps; return counts of irregular intervals and gaps (s)."""
     dt = np.diff(t)
     repeated = int(np.sum(dt == 0))
     backwards = int(np.sum(dt < 0))
@@ -72,7 +90,18 @@ def check_timestamps(t: np.ndarray, name: str = "imu.csv") -> dict:
         )
     median = float(np.median(dt))
     irregular = int(np.sum(np.abs(dt - median) > JITTER_TOLERANCE * median))
-    return {"median_interval_s": median, "irregular_intervals": irregular}
+    gaps = dt > GAP_PERIODS * median
+    return {"median_interval_s": median, "irregular_intervals": irregular, "gaps": int(gaps.sum()),
+            "longest_gap_s": float(dt.max()), "first_gap_row": int(np.argmax(gaps)) + 1 if gaps.any() else 0}
+
+
+def _time_unit_hint(rate: float) -> str:
+    """What a sample rate outside RATE_RANGE_HZ says about the unit of the time column."""
+    for unit, factor in (("ms", 1e3), ("us", 1e6), ("ns", 1e9)):
+        if RATE_RANGE_HZ[0] <= rate * factor <= RATE_RANGE_HZ[1]:
+            return (f"the time column looks like it is in {unit} ({rate * factor:.4g} Hz if it were): read it with "
+                    f"time_unit='{unit}' (gaitsim nav --time-unit {unit})")
+    return "if the rate is real, pass allow=('rate',) (gaitsim nav --allow rate)"
 
 
 def quietest_window(acc: np.ndarray, length: int) -> tuple[int, int]:
@@ -88,19 +117,94 @@ def quietest_window(acc: np.ndarray, length: int) -> tuple[int, int]:
     return start, start + length
 
 
-def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str = "imu.csv") -> CheckReport:
-    """Check a recording before navigation.
+def rest_runs(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
+              min_duration: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """(starts, ends) sample indices (end exclusive) of runs of at least ``min_duration`` s in which every sample
+    has ``|w| < REST_RATE`` and ``||f| - gravity| < REST_FORCE``: candidate stances and pauses."""
+    rest = (np.linalg.norm(gyr, axis=1) < REST_RATE) & (np.abs(np.linalg.norm(acc, axis=1) - gravity) < REST_FORCE)
+    edges = np.diff(np.concatenate([[0], rest.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    long_enough = t[ends - 1] - t[starts] >= min_duration
+    return starts[long_enough], ends[long_enough]
+
+
+def stride_closure(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity (m/s) and tilt (rad) each stride ends with when the gyro carries the accelerometer's attitude.
+
+    For each pair of rests (:func:`rest_runs`) ``STRIDE_RANGE_S`` apart, the attitude levelled on the first
+    rest's specific force is carried by the gyro (strapdown, RK4, from rest) to the start of the next rest. There
+    the foot is still again: the speed the strapdown ends with and the angle between the gravity direction it
+    predicts and the measured specific force stay small (cm/s, degrees) for a consistent sensor, and grow to m/s
+    and tens of degrees for a gyro scaled wrong (or in deg/s) against the accelerometer: gravity is projected
+    with the wrong attitude through the swing. (Flipping every accelerometer sign mirrors the walk and closes;
+    that one shows at rest as gravity along -z.)
+
+    Returns
+    -------
+    speed : (strides,) m/s, |v| at the next rest.
+    tilt : (strides,) rad, tilt mismatch at the next rest.
+    """
+    starts, ends = rest_runs(t, acc, gyr, gravity)
+    speed, tilt = [], []
+    for k in range(len(starts) - 1):
+        first, last = ends[k] - 1, starts[k + 1]
+        if not STRIDE_RANGE_S[0] <= t[last] - t[first] <= STRIDE_RANGE_S[1]:
+            continue
+        roll, pitch = tilt_from_specific_force(acc[starts[k]:ends[k]].mean(axis=0))
+        window = slice(first, last + 1)
+        path = integrate(t[window], acc[window], gyr[window], quat.from_euler_zyx(0.0, pitch, roll), gravity=gravity)
+        predicted_up = quat.rotate(quat.conjugate(path.quat[-1]), np.array([0.0, 0.0, 1.0]))
+        measured = acc[starts[k + 1]:ends[k + 1]].mean(axis=0)
+        cosine = float(np.dot(predicted_up, measured) / np.linalg.norm(measured))
+        tilt.append(math.acos(min(1.0, max(-1.0, cosine))))
+        speed.append(float(np.linalg.norm(path.vel[-1])))
+    return np.array(speed), np.array(tilt)
+
+
+def flat_tops(x: np.ndarray, rest_level: np.ndarray, rest_sd: np.ndarray) -> dict[str, int]:
+    """Samples in runs of >= CLIP_MIN_RUN consecutive samples sitting exactly at a column's maximum or minimum,
+    where that extreme lies more than CLIP_MIN_SPREAD rest standard deviations from the rest level (so that a
+    quantised still signal is not read as clipping), per column name (``acc_x`` ...)."""
+    found = {}
+    for label, columns in (("acc", slice(0, 3)), ("gyr", slice(3, 6))):
+        block = x[:, columns]
+        for i, axis in enumerate("xyz"):
+            column = block[:, i]
+            level, spread = rest_level[columns][i], max(rest_sd[columns][i], 1e-12)
+            count = 0
+            for extreme in (column.max(), column.min()):
+                if abs(extreme - level) <= CLIP_MIN_SPREAD * spread:
+                    continue
+                at = np.concatenate([[0], (column == extreme).astype(np.int8), [0]])
+                edges = np.diff(at)
+                lengths = np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)
+                count += int(lengths[lengths >= CLIP_MIN_RUN].sum())
+            if count:
+                found[f"{label}_{axis}"] = count
+    return found
+
+
+def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str = "imu.csv",
+                    allow: tuple[str, ...] = ()) -> CheckReport:
+    """Check a recording before navigation (see the module docstring for what is refused and what is flagged).
 
     Parameters
     ----------
     rec : Recording (t in s, acc in m/s^2, gyr in rad/s).
     gravity : m/s^2, expected static specific-force magnitude.
     name : how to call the source in messages (e.g. the file path).
+    allow : names of :data:`ALLOWABLE` refusals to report as warnings instead ("rate": a sample rate outside
+        RATE_RANGE_HZ; "units": an accelerometer reading g or a gyro above any walking rate; "closure": strides
+        whose gyro attitude disagrees with the accelerometer).
 
     Returns
     -------
-    CheckReport with the warnings; raises RecordingError on fatal problems.
+    CheckReport with the warnings and counts (the reader's flags, ``rec.flags``, included); raises
+    RecordingError on fatal problems.
     """
+    unknown = sorted(set(allow) - set(ALLOWABLE))
+    if unknown:
+        raise ValueError(f"allow = {unknown}: unknown check names; allowed: {', '.join(ALLOWABLE)}")
     t = np.asarray(rec.t, float)
     acc = np.asarray(rec.acc, float)
     gyr = np.asarray(rec.gyr, float)
@@ -110,48 +214,83 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
                              "expected (N,), (N,3), (N,3)")
     if n < 2:
         raise RecordingError(f"{name}: {n} samples; at least 2 are needed (and enough rest to align)")
-    _finite_check(name, ("t",), t[:, None])
-    _finite_check(name, ("acc_x", "acc_y", "acc_z"), acc)
-    _finite_check(name, ("gyr_x", "gyr_y", "gyr_z"), gyr)
+    require_finite(np.column_stack([t, acc, gyr]), IMU_COLUMNS, name)
     report = CheckReport()
+    report.counts.update(getattr(rec, "flags", {}))
     timing = check_timestamps(t, name)
     report.counts.update(timing)
+    fs = 1.0 / timing["median_interval_s"]
+    report.counts["rate_hz"] = fs
+    if not RATE_RANGE_HZ[0] <= fs <= RATE_RANGE_HZ[1]:
+        report.refuse("rate" in allow, f"{name}: column t: the median sample interval gives {fs:.4g} Hz, outside "
+                      f"{RATE_RANGE_HZ[0]:g} Hz..{RATE_RANGE_HZ[1]:g} kHz; {_time_unit_hint(fs)}".replace(
+                          f"{RATE_RANGE_HZ[1]:g} kHz", f"{RATE_RANGE_HZ[1] / 1e3:g} kHz"))
     if timing["irregular_intervals"]:
         report.warn(f"{name}: {timing['irregular_intervals']} of {n - 1} sample intervals deviate more than "
                     f"{JITTER_TOLERANCE:.0%} from the median {timing['median_interval_s']:.6g} s; the timestamps are "
                     "used as they are", irregular_intervals=timing["irregular_intervals"])
+    if timing["gaps"]:
+        report.warn(f"{name}: {timing['gaps']} gaps longer than {GAP_PERIODS:g} sample periods (longest "
+                    f"{timing['longest_gap_s']:.4g} s, first after row {timing['first_gap_row']}): lost samples; the "
+                    "filter integrates across them as they are")
 
-    fs = 1.0 / timing["median_interval_s"]
     start, end = quietest_window(acc, int(round(STATIC_WINDOW_S * fs)))
     report.static_window = (start, end)
-    static_f = float(np.linalg.norm(acc[start:end].mean(axis=0)))
+    static_acc = acc[start:end].mean(axis=0)
+    static_f = float(np.linalg.norm(static_acc))
     static_w = float(np.linalg.norm(gyr[start:end].mean(axis=0)))
     report.counts.update(static_specific_force=static_f, static_rate=static_w)
     if ACC_IN_G_BAND[0] <= static_f <= ACC_IN_G_BAND[1]:
-        raise RecordingError(f"{name}: columns acc_*: specific force at rest (samples {start}..{end - 1}) is "
-                             f"{static_f:.4g}: the accelerometer looks like it reports g; expected ~{gravity} m/s^2")
+        report.refuse("units" in allow, f"{name}: columns acc_*: specific force at rest (samples {start}..{end - 1}) "
+                      f"is {static_f:.4g}: the accelerometer looks like it reports g; expected ~{gravity} m/s^2")
     if abs(static_f - gravity) > GRAVITY_TOLERANCE * gravity:
         report.warn(f"{name}: specific force in the quietest window (samples {start}..{end - 1}) is {static_f:.4g} "
                     f"m/s^2, not ~{gravity}: wrong units or no rest in the recording")
-    peak_rate = float(np.max(np.linalg.norm(gyr, axis=1)))
-    report.counts["peak_rate"] = peak_rate
-    if peak_rate > MAX_WALKING_RATE:
-        raise RecordingError(f"{name}: columns gyr_*: peak rate {peak_rate:.4g} exceeds {MAX_WALKING_RATE} rad/s "
-                             f"({math.degrees(MAX_WALKING_RATE):.0f} deg/s): the gyro looks like it reports deg/s; "
-                             "expected rad/s")
+    if static_acc[2] < 0:
+        report.warn(f"{name}: columns acc_*: specific force at rest (samples {start}..{end - 1}) is "
+                    f"{np.round(static_acc, 3).tolist()} m/s^2, pointing along -z: the sensor is upside down or the "
+                    "accelerometer's signs are flipped (z must point up when the foot is flat)")
+    rate_norm = np.linalg.norm(gyr, axis=1)
+    peak_rate = float(rate_norm.max())
+    fast = int(np.sum(rate_norm > MAX_WALKING_RATE))
+    report.counts.update(peak_rate=peak_rate, samples_above_walking_rate=fast)
+    if fast > max(1, MAX_GLITCH_SHARE * n):
+        report.refuse("units" in allow, f"{name}: columns gyr_*: {fast} of {n} samples exceed {MAX_WALKING_RATE} rad/s "
+                      f"({math.degrees(MAX_WALKING_RATE):.0f} deg/s; peak {peak_rate:.4g}): the gyro looks like it "
+                      "reports deg/s; expected rad/s")
+    elif fast:
+        report.warn(f"{name}: columns gyr_*: {fast} of {n} samples exceed {MAX_WALKING_RATE} rad/s (peak "
+                    f"{peak_rate:.4g} rad/s): isolated glitches, not a unit problem; left as they are")
     if static_w > MAX_STATIC_RATE:
         report.warn(f"{name}: mean rate in the quietest window is {static_w:.4g} rad/s "
                     f"({math.degrees(static_w):.3g} deg/s) at rest: gyro in deg/s or a large uncompensated bias")
-    clipped = {}
-    for label, x in (("acc", acc), ("gyr", gyr)):
-        for i, axis in enumerate("xyz"):
-            extreme = np.max(np.abs(x[:, i]))
-            count = int(np.sum(np.abs(x[:, i]) == extreme))
-            if extreme > CLIP_MIN_LEVEL[label] and count >= CLIP_MIN_COUNT:
-                clipped[f"{label}_{axis}"] = count
+    starts, _ = rest_runs(t, acc, gyr, gravity, START_REST_S)
+    first_rest = float(t[starts[0]] - t[0]) if len(starts) else math.inf
+    report.counts["first_rest_s"] = first_rest
+    if first_rest > 0:
+        where = f"begins {first_rest:.4g} s in" if len(starts) else "is nowhere"
+        report.warn(f"{name}: the recording does not start at rest: the first {START_REST_S:g} s of rest {where}; the "
+                    "filter aligns on the first stationary window")
+    both = np.column_stack([acc, gyr])
+    window = both[start:end]
+    clipped = flat_tops(both, window.mean(axis=0), window.std(axis=0))
     if clipped:
-        report.warn(f"{name}: samples sitting exactly at a column's extreme value (possible clipping): {clipped}",
-                    clipped_samples=clipped)
+        report.warn(f"{name}: flat tops at a column's extreme value (possible clipping), samples per column: "
+                    f"{clipped}", clipped_samples=clipped)
+    speed, tilt = stride_closure(t, acc, gyr, gravity)
+    report.counts["closure_strides"] = len(speed)
+    if len(speed) >= MIN_CLOSURE_STRIDES:
+        median = float(np.median(speed))
+        off = int(np.sum(speed > MAX_CLOSURE_SPEED))
+        report.counts.update(closure_speed_median_mps=median, closure_tilt_median_deg=math.degrees(np.median(tilt)),
+                             closure_strides_off=off)
+        if median > MAX_CLOSURE_SPEED:
+            report.refuse("closure" in allow, f"{name}: gyro against accelerometer: carried by the gyro from one rest "
+                          f"to the next, {off} of {len(speed)} strides end faster than {MAX_CLOSURE_SPEED:g} m/s "
+                          f"(median {median:.3g} m/s, tilt off by {math.degrees(np.median(tilt)):.1f} deg) where the "
+                          "foot is still: a wrong gyro scale or unit against the accelerometer"
+                          + (f" (or the clipping flagged above: {clipped})" if clipped else "") + "; pass "
+                          "allow=('closure',) (gaitsim nav --allow closure) to navigate anyway")
     return report
 
 

@@ -11,16 +11,19 @@ import math
 from pathlib import Path
 
 from . import metrics
+from .adaptive_detector import AdaptiveThreshold
+from .calibration import TERM_GROUPS
+from .checks import ALLOWABLE
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .detectors import DETECTORS
 from .ekf import STATE_SIZES, FilterConfig
-from .pipeline import METHODS, NavOptions, navigate, score_solution
-from .calibration import TERM_GROUPS
 from .files import atomic_output_dir, write_json
-from .recording import list_runs, read_recording
+from .pipeline import METHODS, NavOptions, navigate, score_solution
+from .recording import TIME_UNITS, list_runs, read_recording
 from .solution import write_solution_into
 
 _DEFAULT_FILTER = FilterConfig()
+_DEFAULT_ADAPTIVE = AdaptiveThreshold()
 
 
 def add_parser(subparsers) -> None:
@@ -37,6 +40,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("--sigma-g-dps", type=float, default=math.degrees(DEFAULT_SIGMA_G),
                    help="detector gyro sigma, deg/s (default 0.1; converted to rad/s)")
     p.add_argument("--window", type=int, default=DEFAULT_WINDOW, help="detector window, samples (default 3)")
+    p.add_argument("--adaptive-ratio", type=float, default=_DEFAULT_ADAPTIVE.ratio,
+                   help="adaptive detector: threshold = max(--threshold, ratio x the span's peak gyro energy in "
+                        f"sigma_g^2), dimensionless (default {_DEFAULT_ADAPTIVE.ratio:g}; 0: fixed threshold)")
+    p.add_argument("--adaptive-span", type=float, default=_DEFAULT_ADAPTIVE.span_s,
+                   help=f"adaptive detector: centred span the peak is taken over, s (default {_DEFAULT_ADAPTIVE.span_s:g})")
+    p.add_argument("--adaptive-window", type=float, default=_DEFAULT_ADAPTIVE.window_s,
+                   help=f"adaptive detector: window duration, s (default {_DEFAULT_ADAPTIVE.window_s:g}; replaces --window)")
     p.add_argument("--states", type=int, choices=STATE_SIZES, default=_DEFAULT_FILTER.states,
                    help="EKF size: 9 (pos, vel, att), 15 (+biases), 24 (+gyro g-sensitivity)")
     p.add_argument("--zupt-sigma", type=float, default=_DEFAULT_FILTER.zupt_sigma,
@@ -54,6 +64,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("--stance-velocity", default=None,
                    help="stance velocity model JSON (step 2; default zero velocity)")
     p.add_argument("--rts", action="store_true", help="RTS-smooth the solution")
+    p.add_argument("--time-unit", choices=TIME_UNITS, default="s",
+                   help="unit of the recording's time columns (default s; the input check refuses a sample rate "
+                        "outside 20 Hz..5 kHz and says when the time looks like ms or us)")
+    p.add_argument("--allow", action="append", choices=ALLOWABLE, default=[],
+                   help="turn the refusal of one input check into a warning (repeatable): rate (sample rate "
+                        "outside 20 Hz..5 kHz), units (accelerometer in g, gyro above any walking rate), closure "
+                        "(gyro against accelerometer over the strides)")
     p.set_defaults(func=run)
 
 
@@ -63,9 +80,11 @@ def options_from_args(args) -> NavOptions:
     terms = tuple(x.strip() for x in args.calibration_terms.split(",") if x.strip())
     return NavOptions(
         detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g_dps),
-        window=args.window, filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
+        window=args.window, adaptive=AdaptiveThreshold(args.adaptive_ratio, args.adaptive_span, args.adaptive_window),
+        filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,
         heading=None if args.heading_deg is None else math.radians(args.heading_deg), gravity=args.gravity,
+        allow=tuple(args.allow),
     )
 
 
@@ -80,7 +99,7 @@ def run(args) -> int:
     """Execute ``gaitsim nav``; returns the exit code."""
     options = options_from_args(args)
     folders = list_runs(args.recording)
-    recs = [read_recording(f) for f in folders]
+    recs = [read_recording(f, time_unit=args.time_unit) for f in folders]
     solutions = navigate(recs, options)
     scores = [score_solution(r, s) for r, s in zip(recs, solutions)]
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:

@@ -27,7 +27,8 @@ import numpy as np
 
 from .constants import DEFAULT_GRAVITY, DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 
-DETECTORS = ("shoe", "are", "mv", "mag", "oracle")
+STATISTICS = ("shoe", "are", "mv", "mag")
+DETECTORS = STATISTICS + ("adaptive", "oracle")
 SLIDING = "sliding window, step 1; all W samples of a window below the threshold are stationary (OpenShoe)"
 BLOCKS = "non-overlapping blocks of W samples; a block below the threshold is stationary (pyshoe)"
 WHOLE_RECORDING_GRAVITY = (
@@ -50,6 +51,8 @@ class DetectorParams:
     fs : Hz, sample rate the window length refers to (median rate for irregular timestamps).
     gravity : m/s^2, gravity magnitude used by SHOE and MAG.
     semantics : how windows are laid out and marked.
+    adaptation : for the adaptive SHOE (nav.adaptive_detector), how its threshold follows the gait (threshold is
+        then the floor gamma_0); None for a fixed threshold.
     """
 
     name: str
@@ -60,15 +63,19 @@ class DetectorParams:
     fs: float
     gravity: float = DEFAULT_GRAVITY
     semantics: str = SLIDING
+    adaptation: dict | None = None
 
     def as_dict(self) -> dict:
         """The parameters as a JSON-ready dict (SI units; sigma_g also in deg/s for reading)."""
-        return {
+        out = {
             "detector": self.name, "threshold": self.threshold, "sigma_a_m_s2": self.sigma_a,
             "sigma_g_rad_s": self.sigma_g, "sigma_g_deg_s": math.degrees(self.sigma_g), "window_samples": self.window,
             "window_s": self.window / self.fs, "fs_hz": self.fs, "gravity_m_s2": self.gravity,
             "window_semantics": self.semantics,
         }
+        if self.adaptation is not None:
+            out["adaptation"] = dict(self.adaptation)
+        return out
 
 
 @dataclass(frozen=True)
@@ -80,14 +87,17 @@ class DetectorResult:
     stationary : (N,) bool, samples marked as zero-velocity.
     statistic : (N - W + 1,) the test statistic T(k) of the window starting at k (empty for the oracle).
     params : DetectorParams used.
+    threshold : (N - W + 1,) the threshold each window was compared with when it varies (adaptive SHOE); None
+        when it is ``params.threshold`` throughout.
     """
 
     stationary: np.ndarray
     statistic: np.ndarray
     params: DetectorParams
+    threshold: np.ndarray | None = None
 
 
-def _window_sum(x: np.ndarray, window: int) -> np.ndarray:
+def window_sum(x: np.ndarray, window: int) -> np.ndarray:
     """Sums over windows of ``window`` samples along axis -1, one per start index (length N - W + 1)."""
     n = x.shape[-1]
     out = x[..., : n - window + 1].copy()
@@ -96,7 +106,7 @@ def _window_sum(x: np.ndarray, window: int) -> np.ndarray:
     return out
 
 
-def _spread_marks(below: np.ndarray, window: int) -> np.ndarray:
+def spread_marks(below: np.ndarray, window: int) -> np.ndarray:
     """Mark all W samples of every window whose flag in ``below`` (..., N - W + 1) is set; returns (..., N)."""
     shape = below.shape[:-1] + (below.shape[-1] + window - 1,)
     marked = np.zeros(shape, bool)
@@ -126,7 +136,7 @@ def statistic(name: str, acc: np.ndarray, gyr: np.ndarray, sigma_a: float, sigma
         raise ValueError(f"detector window {window} samples is not in 1..{acc.shape[-2]} (the recording length)")
     w = float(window)
     if name in ("shoe", "mv"):
-        mean_a = np.stack([_window_sum(acc[..., i], window) for i in range(3)], -1) / w
+        mean_a = np.stack([window_sum(acc[..., i], window) for i in range(3)], -1) / w
         # sum |y_l - ybar|^2 = sum |y_l|^2 - W |ybar|^2 evaluated as sum |y_l - y_k|^2 - W |ybar - y_k|^2,
         # centred on the window's first sample to avoid cancellation against |y|^2 ~ g^2
         spread = np.zeros(mean_a.shape[:-1])
@@ -141,13 +151,13 @@ def statistic(name: str, acc: np.ndarray, gyr: np.ndarray, sigma_a: float, sigma
             return spread / (sigma_a**2 * w)
         # sum |y_l - g u|^2 = sum |y_l - ybar|^2 + W (|ybar| - g)^2 with u = ybar / |ybar|
         acc_term = spread + w * (np.linalg.norm(mean_a, axis=-1) - gravity) ** 2
-        gyr_term = _window_sum(np.einsum("...i,...i->...", gyr, gyr), window)
+        gyr_term = window_sum(np.einsum("...i,...i->...", gyr, gyr), window)
         return (acc_term / sigma_a**2 + gyr_term / sigma_g**2) / w
     if name == "are":
-        return _window_sum(np.einsum("...i,...i->...", gyr, gyr), window) / (sigma_g**2 * w)
+        return window_sum(np.einsum("...i,...i->...", gyr, gyr), window) / (sigma_g**2 * w)
     if name == "mag":
-        return _window_sum((np.linalg.norm(acc, axis=-1) - gravity) ** 2, window) / (sigma_a**2 * w)
-    raise ValueError(f"detector {name!r} is not one of {DETECTORS[:-1]} (or 'oracle')")
+        return window_sum((np.linalg.norm(acc, axis=-1) - gravity) ** 2, window) / (sigma_a**2 * w)
+    raise ValueError(f"detector statistic {name!r} is not one of {STATISTICS}")
 
 
 def sample_rate(t: np.ndarray) -> float:
@@ -162,7 +172,8 @@ def detect(name: str, t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, threshold
 
     Parameters
     ----------
-    name : "shoe", "are", "mv" or "mag" (for the oracle use :func:`oracle`).
+    name : "shoe", "are", "mv" or "mag" (for the oracle use :func:`oracle`, for the adaptive SHOE
+        :func:`nav.adaptive_detector.detect_adaptive`).
     t : (N,) s; acc : (..., N, 3) m/s^2; gyr : (..., N, 3) rad/s.
     threshold : gamma (dimensionless); sigma_a : m/s^2; sigma_g : rad/s; window : samples; gravity : m/s^2.
 
@@ -176,7 +187,7 @@ def detect(name: str, t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, threshold
     stat = statistic(name, acc, gyr, sigma_a, sigma_g, int(window), gravity)
     params = DetectorParams(name, float(threshold), float(sigma_a), float(sigma_g), int(window), sample_rate(t),
                             float(gravity))
-    return DetectorResult(_spread_marks(stat < threshold, int(window)), stat, params)
+    return DetectorResult(spread_marks(stat < threshold, int(window)), stat, params)
 
 
 def oracle(t: np.ndarray, stance: np.ndarray) -> DetectorResult:

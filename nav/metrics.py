@@ -123,6 +123,48 @@ def confusion(detected: np.ndarray, true_stance: np.ndarray) -> dict:
     }
 
 
+def stance_match(detected: np.ndarray, true_stance: np.ndarray) -> dict:
+    """Detected stationary runs matched to true stances, as counts of runs (not samples).
+
+    A true stance is a run of True in ``true_stance``; a detected run is a run of True in ``detected``.
+
+    Returns
+    -------
+    dict with ``true_stances``; ``detected_runs``; ``found`` (true stances with at least one detected sample);
+    ``missed`` (true stances with none); ``found_fraction`` = found / true_stances; ``merged`` (detected runs
+    touching two or more true stances: the swing between them was never seen, a stride is lost);
+    ``spurious`` (detected runs touching no true stance: a zero-velocity update while the foot moves);
+    ``split`` (true stances touched by two or more detected runs; harmless to the filter, reported for the
+    reader).
+    """
+    d = np.asarray(detected, bool)
+    s = np.asarray(true_stance, bool)
+    if d.shape != s.shape or d.ndim != 1:
+        raise ValueError(f"stance_match: detected {d.shape} and true_stance {s.shape} must be equal 1-D shapes")
+    true_starts, _ = stationary_runs(s)
+    first = np.zeros(len(s), int)
+    first[true_starts] = 1
+    stance_id = np.where(s, np.cumsum(first), 0)  # 1, 2, ... inside the true stances, 0 outside
+    starts, _ = stationary_runs(d)
+    if len(starts):
+        # reduceat reaches to the next run's start; samples between runs are not detected and are masked out
+        highest = np.maximum.reduceat(np.where(d, stance_id, 0), starts)
+        lowest = np.minimum.reduceat(np.where(d & (stance_id > 0), stance_id, len(s) + 1), starts)
+        touched = np.where(highest > 0, highest - lowest + 1, 0)
+    else:
+        touched = np.zeros(0, int)
+    overlap_starts, _ = stationary_runs(d & s)
+    runs_per_stance = np.bincount(stance_id[overlap_starts], minlength=len(true_starts) + 1)[1:]
+    found = int(np.sum(runs_per_stance > 0))
+    n_true = len(true_starts)
+    return {
+        "true_stances": n_true, "detected_runs": len(starts), "found": found, "missed": n_true - found,
+        "found_fraction": found / n_true if n_true else math.nan,
+        "merged": int(np.sum(touched >= 2)), "spurious": int(np.sum(touched == 0)),
+        "split": int(np.sum(runs_per_stance >= 2)),
+    }
+
+
 def stride_length_ratio(t: np.ndarray, pos: np.ndarray, stationary: np.ndarray, ref_t: np.ndarray,
                         ref_pos: np.ndarray) -> float:
     """Sum of the estimate's horizontal distances between the middles of consecutive ZUPT windows over the

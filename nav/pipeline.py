@@ -20,9 +20,10 @@ import numpy as np
 
 from . import detectors, metrics
 from . import quaternion as quat
+from .adaptive_detector import AdaptiveThreshold, detect_adaptive
 from .alignment import DEFAULT_MIN_SAMPLES, align, first_leg_direction, yaw_of
 from .calibration import TERM_GROUPS, load_calibration
-from .checks import check_recording, check_stance_found
+from .checks import ALLOWABLE, check_recording, check_stance_found
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .ekf import FilterConfig, FilterOutput, run_filter, run_filter_batch
 from .recording import Recording, RecordingError
@@ -49,9 +50,12 @@ class NavOptions:
 
     Attributes
     ----------
-    detector : "shoe", "are", "mv", "mag" or "oracle" (the recording's true stance labels).
-    threshold : detector threshold gamma (dimensionless). Default 3e4 (OpenShoe).
-    sigma_a : m/s^2, sigma_g : rad/s, window : samples -- detector parameters (OpenShoe: 0.01, 0.1 deg/s, 3).
+    detector : "shoe", "are", "mv", "mag", "adaptive" (SHOE with a threshold that follows the gait,
+        nav.adaptive_detector) or "oracle" (the recording's true stance labels).
+    threshold : detector threshold gamma (dimensionless); the floor gamma_0 for "adaptive". Default 3e4 (OpenShoe).
+    sigma_a : m/s^2, sigma_g : rad/s, window : samples -- detector parameters (OpenShoe: 0.01, 0.1 deg/s, 3);
+        "adaptive" takes its window from ``adaptive.window_s`` instead.
+    adaptive : AdaptiveThreshold, ratio, span (s) and window (s) of the "adaptive" detector.
     filter : FilterConfig (states, noise densities, ZUPT noise, ...).
     method : "auto" (exact increments when the recording's IMU is its exact truth and no calibration is
         applied, else "rk4"), "rk4" or "increments".
@@ -63,6 +67,8 @@ class NavOptions:
     heading : rad, initial heading of the body x axis counter-clockwise from east; None: see the module docstring.
     gravity : m/s^2; None: the recording's (``Recording.gravity``). It replaces ``filter.gravity``.
     align_min_samples : shortest stationary window accepted for the alignment, samples.
+    allow : input checks (``nav.checks.ALLOWABLE``: "rate", "units", "closure") whose refusal is turned into a
+        warning; default none.
     """
 
     detector: str = "shoe"
@@ -70,6 +76,7 @@ class NavOptions:
     sigma_a: float = DEFAULT_SIGMA_A
     sigma_g: float = DEFAULT_SIGMA_G
     window: int = DEFAULT_WINDOW
+    adaptive: AdaptiveThreshold = field(default_factory=AdaptiveThreshold)
     filter: FilterConfig = field(default_factory=FilterConfig)
     method: str = "auto"
     calibration: object = None
@@ -79,8 +86,12 @@ class NavOptions:
     heading: float | None = None
     gravity: float | None = None
     align_min_samples: int = DEFAULT_MIN_SAMPLES
+    allow: tuple[str, ...] = ()
 
     def __post_init__(self):
+        unknown = sorted(set(self.allow) - set(ALLOWABLE))
+        if unknown:
+            raise ValueError(f"NavOptions.allow = {unknown}: unknown check names; allowed: {ALLOWABLE}")
         if self.detector not in detectors.DETECTORS:
             raise ValueError(f"NavOptions.detector = {self.detector!r}; allowed: {detectors.DETECTORS}")
         if self.method not in METHODS:
@@ -138,7 +149,13 @@ def _detect(rec: Recording, acc: np.ndarray, gyr: np.ndarray, options: NavOption
     if options.detector == "oracle":
         if rec.truth is None:
             raise RecordingError("detector 'oracle' needs the recording's truth (truth.csv with a stance column)")
+        if len(rec.truth.t) != len(rec.t):
+            raise RecordingError(f"detector 'oracle' needs the truth on the IMU's samples; truth.csv has "
+                                 f"{len(rec.truth.t)} rows, imu.csv {len(rec.t)}")
         return detectors.oracle(rec.t, rec.truth.stance)
+    if options.detector == "adaptive":
+        return detect_adaptive(rec.t, acc, gyr, options.threshold, options.sigma_a, options.sigma_g, options.adaptive,
+                               gravity)
     return detectors.detect(options.detector, rec.t, acc, gyr, options.threshold, options.sigma_a, options.sigma_g,
                             options.window, gravity)
 
@@ -199,7 +216,7 @@ def _initial_position(rec: Recording, start: int) -> np.ndarray:
 def prepare(rec: Recording, options: NavOptions = NavOptions()) -> PreparedRecording:
     """Checks, calibration, detection, alignment and stance velocity of one recording (no filtering)."""
     gravity = _gravity(rec, options)
-    report = check_recording(rec, gravity)
+    report = check_recording(rec, gravity, allow=options.allow)
     acc, gyr, cal_info = _calibrate(rec, options)
     result = _detect(rec, acc, gyr, options, gravity)
     check_stance_found(result.stationary, str(result.params.as_dict()),
@@ -309,7 +326,8 @@ def score_solution(rec: Recording, sol: Solution) -> dict:
         result.update(metrics.score(sol.t, sol.pos, rec.truth.t, rec.truth.pos, sol.quat, rec.truth.quat,
                                     sol.stationary))
         result["scored_against"] = "truth"
-        result["detector_confusion"] = metrics.confusion(sol.stationary[sol.start:], rec.truth.stance[sol.start:])
+        if len(rec.truth.t) == len(sol.t):  # stance labels on the IMU's samples (no clock error or skew)
+            result["detector_confusion"] = metrics.confusion(sol.stationary[sol.start:], rec.truth.stance[sol.start:])
     elif rec.reference is not None:
         result.update(metrics.score(sol.t, sol.pos, rec.reference.t, rec.reference.pos,
                                     stationary=sol.stationary))

@@ -17,7 +17,8 @@ A recording is a folder anyone can read without this project:
 ``meta.json``
     schema version, generator, frames and units of every column, gait/path/sensor parameters, seed.
 ``recording.npz`` (optional)
-    a binary twin of the CSVs for speed; the CSVs stay the reference.
+    a binary twin of the CSVs for speed; the CSVs stay the reference: the twin holds the SHA-256 of the CSVs it
+    was written with (``csv_sha256``), and the reader uses it only while that still matches the CSVs.
 
 This module belongs to ``nav`` so that the filter can read any recording without the simulator;
 ``gaitsim`` imports it to write them.
@@ -25,7 +26,9 @@ This module belongs to ``nav`` so that the filter can read any recording without
 
 from __future__ import annotations
 
+import hashlib
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -44,6 +47,14 @@ TRUTH_COLUMNS = (
 )
 EVENT_COLUMNS = ("stride", "t_ic", "t_ff", "t_ho", "t_to", "disp_x", "disp_y", "disp_z")
 REFERENCE_COLUMNS = ("t", "pos_x", "pos_y", "pos_z")
+# (table key, file name, columns) of every CSV file of a recording, in the order the twin's digest reads them
+CSV_FILES = (("imu", "imu.csv", IMU_COLUMNS), ("truth", "truth.csv", TRUTH_COLUMNS),
+             ("events", "events.csv", EVENT_COLUMNS), ("reference", "reference.csv", REFERENCE_COLUMNS))
+TWIN_FILE = "recording.npz"
+TWIN_DIGEST_KEY = "csv_sha256"  # array in the twin holding csv_digest() of the CSVs it was written with
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}  # unit of a file's time columns -> s per unit
+MAX_TRUTH_CLOCK_SHARE = 0.01  # truth and IMU times on equal rows may differ by half a period + this share of
+# the span (timestamp jitter and clock error of a simulated sensor)
 
 COLUMN_UNITS = {
     "imu.csv": {"t": "s", "acc": "m/s^2, specific force, sensor frame", "gyr": "rad/s, sensor frame"},
@@ -61,6 +72,10 @@ COLUMN_UNITS = {
 
 class RecordingError(ValueError):
     """A recording folder or array that cannot be used; the message names file, column and value."""
+
+
+class RecordingWarning(UserWarning):
+    """Something in a recording folder was flagged or ignored (a stale binary twin, reference dropouts)."""
 
 
 @dataclass
@@ -142,6 +157,7 @@ class Recording:
     gyr : (N, 3) rad/s measured angular rate, sensor frame.
     meta : dict, the content of ``meta.json``.
     truth, events, reference : optional.
+    flags : counts of what the reader flagged and left as it is (e.g. ``reference_nan_rows``).
     """
 
     t: np.ndarray
@@ -151,6 +167,7 @@ class Recording:
     truth: Truth | None = None
     events: Events | None = None
     reference: Reference | None = None
+    flags: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -168,16 +185,70 @@ def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
 
 
 def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
-    """The (M, len(header)) table of a CSV written by :func:`write_csv`; raises RecordingError naming the file
-    when its header or column count is not ``header``'s."""
-    with open(path) as fh:
-        first = fh.readline().strip().split(",")
-    if tuple(first) != header:
-        raise RecordingError(f"{path}: header {first} does not match the expected columns {list(header)}")
-    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    """The (M, len(header)) table of a CSV written by :func:`write_csv` (NaN cells allowed: the caller decides).
+
+    Raises
+    ------
+    RecordingError
+        naming the file, and the line and column where a cell is not a number or a line has the wrong number
+        of cells; for a missing or non-text file, a header that is not ``header``, or no data rows.
+    """
+    path = Path(path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            first = fh.readline().strip().split(",")
+            if tuple(first) != header:
+                raise RecordingError(f"{path}: line 1: header {first} does not match the expected columns "
+                                     f"{list(header)}")
+            table = np.loadtxt(fh, delimiter=",", ndmin=2, dtype=float)
+    except FileNotFoundError:
+        raise RecordingError(f"{path}: file not found") from None
+    except UnicodeDecodeError as exc:
+        raise RecordingError(f"{path}: not a text CSV file ({exc.reason} at byte {exc.start})") from None
+    except ValueError as exc:
+        _raise_bad_cell(path, header)
+        raise RecordingError(f"{path}: not a table of numbers ({exc})") from None
+    if table.shape[0] == 0:
+        raise RecordingError(f"{path}: no data rows below the header")
     if table.shape[1] != len(header):
-        raise RecordingError(f"{path}: {table.shape[1]} columns, expected {len(header)}")
+        raise RecordingError(f"{path}: {table.shape[1]} columns, expected {len(header)} ({', '.join(header)})")
     return table
+
+
+def _raise_bad_cell(path: Path, header: tuple[str, ...]) -> None:
+    """Find the first line of ``path`` that numpy could not parse and raise naming its line and column."""
+    with open(path, encoding="utf-8") as fh:
+        fh.readline()
+        for line_number, line in enumerate(fh, start=2):
+            if not line.strip():
+                continue
+            cells = line.rstrip("\r\n").split(",")
+            if len(cells) != len(header):
+                raise RecordingError(f"{path}: line {line_number}: {len(cells)} cells, expected {len(header)} "
+                                     f"({', '.join(header)}); truncated or extra cells")
+            for column, cell in zip(header, cells):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise RecordingError(f"{path}: line {line_number}, column {column}: {cell.strip()!r} is not a "
+                                         "number") from None
+
+
+def nonfinite_cells(table: np.ndarray, header: tuple[str, ...]) -> tuple[dict[str, int], int]:
+    """NaN/inf cells of a table: (count per column that has any, first data row holding one, 1-based; 0 if none)."""
+    bad = ~np.isfinite(table)
+    if not bad.any():
+        return {}, 0
+    per_column = {column: int(n) for column, n in zip(header, bad.sum(axis=0)) if n}
+    return per_column, int(np.flatnonzero(bad.any(axis=1))[0]) + 1
+
+
+def require_finite(table: np.ndarray, header: tuple[str, ...], name: str) -> None:
+    """Raise :class:`RecordingError` naming ``name``, the columns and the first data row with NaN/inf cells."""
+    per_column, first = nonfinite_cells(table, header)
+    if per_column:
+        raise RecordingError(f"{name}: {sum(per_column.values())} NaN/inf cells (per column {per_column}; first in "
+                             f"data row {first}, line {first + 1}); every value must be finite")
 
 
 def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> None:
@@ -200,7 +271,7 @@ def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> N
     with open(folder / "meta.json", "w") as fh:
         json.dump(meta, fh, indent=2, sort_keys=True, default=_json_default)
     if binary:
-        np.savez(folder / "recording.npz", **arrays)
+        np.savez(folder / TWIN_FILE, **arrays, **{TWIN_DIGEST_KEY: np.array(csv_digest(folder))})
 
 
 def _json_default(o):
@@ -218,30 +289,102 @@ def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False,
     return Path(folder)
 
 
-def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
-    """Read a recording folder written by :func:`write_recording` (or by hand in the same format)."""
+def csv_digest(folder: str | Path) -> str:
+    """SHA-256 (hex) of the recording's CSV files (names and bytes, in :data:`CSV_FILES` order): what a binary
+    twin must carry to be used instead of them."""
+    digest = hashlib.sha256()
+    for _key, name, _columns in CSV_FILES:
+        path = Path(folder) / name
+        if path.exists():
+            digest.update(name.encode() + b"\0")
+            with open(path, "rb") as fh:
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    digest.update(block)
+            digest.update(b"\0")
+    return digest.hexdigest()
+
+
+def _read_meta(folder: Path) -> dict:
+    path = folder / "meta.json"
+    if not path.exists():
+        return {}
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise RecordingError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise RecordingError(f"{path}: must hold a JSON object ({{...}}), holds a {type(meta).__name__}")
+    return meta
+
+
+def _twin_tables(folder: Path) -> dict | None:
+    """The tables of ``recording.npz`` if it carries the digest of the CSVs beside it, else None (with a
+    :class:`RecordingWarning` saying why it is ignored)."""
+    path = folder / TWIN_FILE
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as twin:
+            tables = {k: twin[k] for k in twin.files}
+    except Exception as exc:  # any unreadable twin (bad zip, truncated, not an npz) falls back to the CSVs
+        warnings.warn(f"{path}: unreadable binary twin ({type(exc).__name__}: {exc}); reading the CSVs",
+                      RecordingWarning, stacklevel=3)
+        return None
+    stored = str(tables.pop(TWIN_DIGEST_KEY, ""))
+    if stored != csv_digest(folder):
+        warnings.warn(f"{path}: ignored: it {'carries no' if not stored else 'does not carry the current'} digest of "
+                      "the CSV files beside it (the CSVs are the reference); reading the CSVs", RecordingWarning,
+                      stacklevel=3)
+        return None
+    return tables
+
+
+def _time_columns(key: str) -> list[int]:
+    """Indices of the columns holding times in the table ``key``."""
+    return [1, 2, 3, 4] if key == "events" else [0]
+
+
+def read_recording(folder: str | Path, prefer_binary: bool = True, time_unit: str = "s") -> Recording:
+    """Read a recording folder written by :func:`write_recording` (or by hand in the same format).
+
+    Parameters
+    ----------
+    folder : the recording folder (``imu.csv`` required).
+    prefer_binary : use ``recording.npz`` instead of parsing the CSVs when it carries the digest of the CSVs
+        beside it (:func:`csv_digest`); a twin without it, with another, or unreadable is ignored with a
+        :class:`RecordingWarning`. The CSVs are the reference.
+    time_unit : unit of every time column in the files (one of :data:`TIME_UNITS`); converted to s here.
+
+    Raises
+    ------
+    RecordingError
+        naming the file, line and column of a cell that is not a number, NaN/inf in imu, truth or events,
+        timestamps that do not increase, files whose time spans do not match, or a meta.json that is not a
+        JSON object. NaN rows in reference.csv (tracking dropouts) are not an error: they are counted in
+        ``Recording.flags`` and left out of scoring.
+    """
     folder = Path(folder)
-    if not (folder / "imu.csv").exists():
+    if time_unit not in TIME_UNITS:
+        raise RecordingError(f"time_unit = {time_unit!r}; allowed: {', '.join(TIME_UNITS)}")
+    if not (folder / "imu.csv").is_file():
         raise RecordingError(f"{folder}: not a recording folder (no imu.csv)")
-    meta = {}
-    if (folder / "meta.json").exists():
-        with open(folder / "meta.json") as fh:
-            meta = json.load(fh)
-    npz_path = folder / "recording.npz"
-    if prefer_binary and npz_path.exists():
-        with np.load(npz_path) as z:
-            tables = {k: z[k] for k in z.files}
-    else:
-        tables = {"imu": read_csv(folder / "imu.csv", IMU_COLUMNS)}
-        for key, name, cols in (
-            ("truth", "truth.csv", TRUTH_COLUMNS),
-            ("events", "events.csv", EVENT_COLUMNS),
-            ("reference", "reference.csv", REFERENCE_COLUMNS),
-        ):
-            if (folder / name).exists():
-                tables[key] = read_csv(folder / name, cols)
+    meta = _read_meta(folder)
+    tables = _twin_tables(folder) if prefer_binary else None
+    if tables is None:
+        tables = {key: read_csv(folder / name, columns) for key, name, columns in CSV_FILES
+                  if key == "imu" or (folder / name).exists()}
+    for key, name, columns in CSV_FILES:
+        if key in tables:
+            table = np.asarray(tables[key], float)
+            if table.ndim != 2 or table.shape[1] != len(columns) or table.shape[0] == 0:
+                raise RecordingError(f"{folder / name}: table of shape {table.shape}; expected (rows >= 1, "
+                                     f"{len(columns)})")
+            table = table.copy()
+            table[:, _time_columns(key)] *= TIME_UNITS[time_unit]
+            tables[key] = table
+    flags = _check_tables(folder, tables)
     imu = tables["imu"]
-    rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta)
+    rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta, flags=flags)
     if "truth" in tables:
         rec.truth = Truth.from_table(tables["truth"])
     if "events" in tables:
@@ -250,6 +393,68 @@ def read_recording(folder: str | Path, prefer_binary: bool = True) -> Recording:
         ref = tables["reference"]
         rec.reference = Reference(t=ref[:, 0].copy(), pos=ref[:, 1:4].copy())
     return rec
+
+
+def _increasing(t: np.ndarray, name: str) -> None:
+    """Raise naming ``name`` and the first data row where the time column ``t`` does not increase."""
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        row = int(np.flatnonzero(steps <= 0)[0]) + 2
+        raise RecordingError(f"{name}: column t: {int(np.sum(steps == 0))} repeated and {int(np.sum(steps < 0))} "
+                             f"decreasing timestamps (first at data row {row}, line {row + 1}: t = {t[row - 1]!r} "
+                             f"after {t[row - 2]!r}); time must increase")
+
+
+def _check_tables(folder: Path, tables: dict) -> dict:
+    """Finite values, increasing time and matching time spans across the files; returns the reader's flags."""
+    imu = tables["imu"]
+    require_finite(imu, IMU_COLUMNS, str(folder / "imu.csv"))
+    t = imu[:, 0]
+    period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    span = (t[0], t[-1])
+    slack = 2 * period + 0.02 * (span[1] - span[0])  # clock error and skew move a simulated IMU clock this much
+    flags = {}
+    if "truth" in tables:
+        truth = tables["truth"]
+        name = str(folder / "truth.csv")
+        require_finite(truth, TRUTH_COLUMNS, name)
+        _increasing(truth[:, 0], name)
+        if len(truth) == len(imu):
+            offset = float(np.max(np.abs(truth[:, 0] - t)))
+            if offset > 0.5 * period + MAX_TRUTH_CLOCK_SHARE * (span[1] - span[0]):
+                raise RecordingError(f"{name}: column t differs from imu.csv's by up to {offset:.6g} s with the same "
+                                     "number of rows; the two files are not on one clock")
+        elif truth[0, 0] > span[0] + slack or truth[-1, 0] < span[1] - slack:
+            raise RecordingError(f"{name}: {len(truth)} rows over t = {truth[0, 0]:.6g}..{truth[-1, 0]:.6g} s do not "
+                                 f"cover imu.csv's {len(imu)} rows over t = {span[0]:.6g}..{span[1]:.6g} s")
+    if "events" in tables:
+        events = tables["events"]
+        name = str(folder / "events.csv")
+        require_finite(events, EVENT_COLUMNS, name)
+        times = events[:, 1:5]
+        order = np.diff(times, axis=1)
+        if np.any(order < 0):
+            row = int(np.flatnonzero((order < 0).any(axis=1))[0]) + 1
+            raise RecordingError(f"{name}: data row {row}: events out of order (t_ic <= t_ff <= t_ho <= t_to "
+                                 f"required): {times[row - 1].tolist()}")
+        if times.min() < span[0] - slack or times.max() > span[1] + slack:
+            raise RecordingError(f"{name}: event times {times.min():.6g}..{times.max():.6g} s fall outside imu.csv's "
+                                 f"{span[0]:.6g}..{span[1]:.6g} s")
+    if "reference" in tables:
+        ref = tables["reference"]
+        name = str(folder / "reference.csv")
+        require_finite(ref[:, :1], REFERENCE_COLUMNS[:1], name)
+        _increasing(ref[:, 0], name)
+        gaps, first = nonfinite_cells(ref[:, 1:], REFERENCE_COLUMNS[1:])
+        if gaps:
+            rows = int(np.sum(~np.isfinite(ref[:, 1:]).all(axis=1)))
+            flags["reference_nan_rows"] = rows
+            warnings.warn(f"{name}: {rows} of {len(ref)} rows hold NaN positions (per column {gaps}; first in data "
+                          f"row {first}): tracking dropouts, left out of scoring", RecordingWarning, stacklevel=3)
+        if ref[-1, 0] < span[0] or ref[0, 0] > span[1]:
+            raise RecordingError(f"{name}: t = {ref[0, 0]:.6g}..{ref[-1, 0]:.6g} s does not overlap imu.csv's "
+                                 f"{span[0]:.6g}..{span[1]:.6g} s")
+    return flags
 
 
 def list_runs(folder: str | Path) -> list[Path]:

@@ -28,7 +28,7 @@ def test_nan_and_inf_samples_are_counted_per_column(walk):
     acc = walk.acc.copy()
     acc[[5, 9], 1] = np.nan
     acc[7, 2] = np.inf
-    expected = r"3 NaN/inf values \(per column \{'acc_y': 2, 'acc_z': 1\}; first at row 5"
+    expected = r"3 NaN/inf cells \(per column \{'acc_y': 2, 'acc_z': 1\}; first in data row 6"
     with pytest.raises(RecordingError, match=expected):
         check_recording(variant(walk, acc=acc))
 

@@ -61,6 +61,24 @@ def test_confusion_counts():
     assert c["precision"] == pytest.approx(2 / 3) and c["recall"] == pytest.approx(2 / 3)
 
 
+def test_stance_match_counts_runs():
+    true = np.zeros(60, bool)
+    for a, b in ((5, 10), (15, 20), (25, 30), (35, 40), (45, 50)):
+        true[a:b] = True
+    det = np.zeros(60, bool)
+    det[6:8] = det[8:9] = True       # stance 1 found by one run (6..8 is one run)
+    det[18:27] = True                # one run over stances 2 and 3: merged
+    det[36] = det[38] = True         # stance 4 found by two runs: split
+    det[42:44] = det[55:57] = True   # two runs in the swing: spurious
+    m = metrics.stance_match(det, true)        # stance 5 (45..50) is missed
+    assert m == {"true_stances": 5, "detected_runs": 6, "found": 4, "missed": 1, "found_fraction": 0.8,
+                 "merged": 1, "spurious": 2, "split": 1}
+    assert metrics.stance_match(true, true) == {"true_stances": 5, "detected_runs": 5, "found": 5, "missed": 0,
+                                                "found_fraction": 1.0, "merged": 0, "spurious": 0, "split": 0}
+    with pytest.raises(ValueError, match="equal 1-D shapes"):
+        metrics.stance_match(det[:-1], true)
+
+
 def test_three_sigma_ellipse_of_known_covariance():
     rng = np.random.default_rng(0)
     cov = np.array([[4.0, 1.5], [1.5, 1.0]])

@@ -9,13 +9,16 @@ gait-cycle analysis of run 0 -> tables, figures and results/README.md (:mod:`gai
 from __future__ import annotations
 
 import dataclasses
+import shutil
 import time
 from pathlib import Path
 
 import numpy as np
 
 from nav.metrics import summarise_runs
-from nav.files import write_json
+from nav.files import publish_into, write_json
+
+from ..errors import ScenarioError
 
 from .runner import run_tasks
 from ..scenario import load_scenario, scenario_from_dict
@@ -41,21 +44,45 @@ def _collect(results: list[dict], tasks: list[dict], prefix: str) -> dict[str, l
     return out
 
 
+def working_folder(out: Path) -> Path:
+    """Where a run of :func:`reproduce` into ``out`` is built: a hidden sibling kept after a failure or an
+    interrupt (its Monte Carlo cache resumes the next run), moved into ``out`` when the run completes."""
+    return out.parent / f".{out.name}.partial"
+
+
 def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = False, workers: int | None = None,
               scheduler: str | None = None, progress: bool = True) -> dict:
-    """Regenerate the report in ``out``; returns the summary numbers (also in ``out/summary.json``)."""
+    """Regenerate the report in ``out``; returns the summary numbers (also in ``out/summary.json``).
+
+    Every input is validated before anything is written. The report is built in :func:`working_folder` and its
+    files replace those of the same name in ``out`` only when everything succeeded (other files in ``out``
+    stay); after a failure ``out`` is untouched and the working folder keeps the finished runs for the next call.
+    """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     timings = {}
     clock = time.perf_counter()
     scenario = load_scenario(scenario_path)
     nav, exp = settings_from_scenario(scenario)
     targets = targets_from_scenario(scenario)
+    if scenario.sensor is None:
+        raise ScenarioError(f"{scenario.source}: an experiment needs a [sensor] table (e.g. preset = \"paper-vn200\"): "
+                            "its calibration lab and compensation study have nothing to calibrate without one")
     doc = scenario_doc(scenario)
     runs = scenario.runs
     if quick:
         doc, exp, runs = quick_overrides(doc, exp)
-    work = out / ("cache-quick" if quick else "cache")
+    if out.exists() and not out.is_dir():
+        raise FileExistsError(f"{out}: exists and is not a folder; name a folder for the output")
+    workers = None if scheduler else (exp.workers if workers is None else workers)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ScenarioError(f"workers = {workers!r}: must be an integer >= 1 (1 = serial)")
+    final, out = out, working_folder(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.mkdir(exist_ok=True)
+    cache = "cache-quick" if quick else "cache"
+    if (final / cache).is_dir() and not (out / cache).exists():
+        shutil.copytree(final / cache, out / cache)  # resume from the last complete run's Monte Carlo
+    work = out / cache
 
     cal = calibrate_sensor(scenario, exp, out)
     stance, stance_info = fit_stance_velocity(doc, nav, exp, cal, out)
@@ -63,8 +90,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
 
     clock = time.perf_counter()
     tasks = build_tasks(doc, nav, exp, runs, scenario.seed, str(cal), str(stance))
-    results = run_tasks(walk_task, tasks, work, workers=None if scheduler else (workers or exp.workers),
-                        scheduler=scheduler, progress=progress)
+    results = run_tasks(walk_task, tasks, work, workers=workers, scheduler=scheduler, progress=progress)
     timings[f"Monte Carlo ({len(tasks)} walks)"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
@@ -96,6 +122,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
     summary["timings_s"] = timings
     report.write(out, summary, main, avg, results, tasks, doc, targets)
     write_json(out / "summary.json", summary)
+    publish_into(out, final)
     return summary
 
 

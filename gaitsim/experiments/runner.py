@@ -7,9 +7,11 @@ on a Dask cluster, always with the same storage and resume semantics.
 Storage
     Each run's result is written as soon as it finishes to ``out_dir/runs/<key>.json`` (a ``/`` in the key makes
     sub-folders), atomically (temporary file, then :func:`os.replace`). The file holds the task, a SHA-256 digest
-    of its canonical JSON, and the result. A later call loads every stored result whose digest matches its task
-    and computes only the others, so an interrupted experiment resumes where it stopped and a changed task is
-    recomputed rather than silently reused.
+    of the task's canonical JSON, of the source code that computes it (every file of the ``gaitsim`` and ``nav``
+    packages: :func:`code_digest`) and of the content of every input file the task names (any string value that
+    is the path of an existing file), and the result. A later call loads every stored result whose digest matches
+    and computes only the others, so an interrupted experiment resumes where it stopped, while a changed task, a
+    changed default in the code or an edited calibration file is recomputed rather than silently reused.
 
 Determinism
     A run's result must depend on its task only -- never on the number of workers, the order runs finish in,
@@ -20,7 +22,9 @@ Determinism
 
 Processes
     Local pools use the ``"forkserver"`` start method where the platform has it, else ``"spawn"``: workers never
-    inherit a forked copy of the parent's numba, MuJoCo or thread state. As a consequence ``fn`` must be
+    inherit a forked copy of the parent's numba, MuJoCo or thread state. Each worker dies with the process that
+    started the pool (a watchdog thread polls it; on Linux the kernel also signals it when its parent dies), so a
+    killed run leaves no worker behind; the forkserver and the resource tracker exit once their clients are gone. As a consequence ``fn`` must be
     picklable by reference (a function defined at the top level of an importable module), and a script that
     calls :func:`run_tasks` must guard its entry point with ``if __name__ == "__main__":``.
 """
@@ -28,6 +32,7 @@ Processes
 from __future__ import annotations
 
 import concurrent.futures
+import functools
 import hashlib
 import json
 import logging
@@ -36,6 +41,8 @@ import os
 import pickle
 import re
 import sys
+import threading
+import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import closing
@@ -227,7 +234,7 @@ def _validate_tasks(tasks: Sequence[dict]) -> list[str]:
         seen[key.casefold()] = key
         directories.update("/".join(segments[:depth]).casefold() for depth in range(1, len(segments)))
         try:
-            digests.append(hashlib.sha256(_canonical_json(task).encode("utf-8")).hexdigest())
+            digests.append(task_digest(task))
         except (TypeError, ValueError) as exc:
             raise ScenarioError(f"task {key!r} is not JSON-serialisable: {exc}") from exc
     clashes = sorted(seen[folded] for folded in seen if f"{folded}.json" in directories)
@@ -252,6 +259,52 @@ def _validate_backend(workers: int | None, scheduler: Any) -> None:
         )
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ScenarioError(f"workers must be an int >= 1 (1 = serial, in this process), got {workers!r}")
+
+
+CODE_PACKAGES = ("gaitsim", "nav")  # packages whose source decides what a run computes
+WATCHDOG_INTERVAL_S = 0.5  # s between a worker's checks that the process that started it is alive
+
+
+@functools.lru_cache(maxsize=1)
+def code_digest() -> str:
+    """SHA-256 (hex) of every source and asset file of the packages that compute a run (:data:`CODE_PACKAGES`),
+    by relative path and content: any edit to the code, a default included, changes it."""
+    digest = hashlib.sha256()
+    for package in CODE_PACKAGES:
+        root = Path(sys.modules[package].__file__ if package in sys.modules else __import__(package).__file__).parent
+        for path in sorted(p for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts
+                           and p.suffix not in (".pyc", ".pyo")):
+            digest.update(f"{package}/{path.relative_to(root).as_posix()}".encode() + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def _input_files(value: Any) -> list[str]:
+    """Every string in a task (nested) that names an existing file: the task's input files."""
+    if isinstance(value, dict):
+        return [f for v in value.values() for f in _input_files(v)]
+    if isinstance(value, list):
+        return [f for v in value for f in _input_files(v)]
+    if isinstance(value, str) and len(value) < 4096 and os.path.isfile(value):
+        return [value]
+    return []
+
+
+def _file_sha256(path: str) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def task_digest(task: dict) -> str:
+    """SHA-256 (hex) of what a run's result depends on: the task's canonical JSON, :func:`code_digest` and the
+    content (not the path) of every input file the task names."""
+    files = {path: _file_sha256(path) for path in sorted(set(_input_files(task)))}
+    content = sorted(files.values())
+    return hashlib.sha256(_canonical_json({"task": task, "code": code_digest(), "input_files": content})
+                          .encode("utf-8")).hexdigest()
 
 
 def _canonical_json(value: Any) -> str:
@@ -332,13 +385,42 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
             "importable module, or pass workers=1 to run in this process"
         ) from exc
     context = multiprocessing.get_context(_start_method())
-    with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+    with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_die_with_parent,
+                                                initargs=(os.getpid(),)) as pool:
         futures = {pool.submit(_execute, fn, tasks[index]): index for index in pending}
         try:
             for future in concurrent.futures.as_completed(futures):
                 yield futures[future], *_future_outcome(future)
         finally:
             pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Worker initializer: end this worker when the process that started the pool is gone.
+
+    On Linux the kernel sends SIGKILL when the worker's own parent (the forkserver) exits; a daemon thread polls
+    ``parent_pid`` as well, which also covers platforms without that and a forkserver that outlives the run.
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            import signal
+
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG = 1
+        except (OSError, AttributeError):
+            pass
+
+    def watch() -> None:
+        while True:
+            time.sleep(WATCHDOG_INTERVAL_S)
+            try:
+                os.kill(parent_pid, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:  # the pid belongs to someone else now: the parent is gone
+                os._exit(1)
+
+    threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
 
 
 def _dask_outcomes(fn, tasks, pending, scheduler) -> Iterator[_Outcome]:

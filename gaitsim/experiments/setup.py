@@ -24,6 +24,7 @@ from nav.zupt_velocity import StanceVelocityProfile, save_stance_velocity, stanc
 
 from ..errors import ScenarioError
 from ..imu.calibration_lab import run_lab
+from ..ranges import check_ranges
 from ..scenario import Scenario, fill, scenario_from_dict
 from .tracker import TrackerSpec, track
 from ..simulate import simulate_walk
@@ -98,9 +99,12 @@ def targets_from_scenario(scenario: Scenario) -> PaperTargets:
     """Validate the [targets] table: every key of :class:`PaperTargets`, a number each."""
     where = f"{scenario.source} [targets]"
     targets = fill(PaperTargets, scenario.targets, where)
-    missing = [f.name for f in dataclasses.fields(PaperTargets) if math.isnan(getattr(targets, f.name))]
+    missing = [f.name for f in dataclasses.fields(PaperTargets) if f.name not in scenario.targets]
     if missing:
         raise ScenarioError(f"{where}: missing key(s) {missing}; every one of them is required")
+    for key, value in dataclasses.asdict(targets).items():
+        if not math.isfinite(value):
+            raise ScenarioError(f"{where}: {key} = {value!r} is not allowed; a target must be a finite number")
     return targets
 
 
@@ -111,6 +115,7 @@ def _tuple_fields(cls) -> dict:
 def settings_from_scenario(scenario: Scenario) -> tuple[NavSettings, ExperimentSettings]:
     """Validate the [nav] and [experiment] tables (unknown keys and wrong types refused)."""
     nav = fill(NavSettings, scenario.nav, f"{scenario.source} [nav]")
+    check_ranges("nav", dataclasses.asdict(nav), f"{scenario.source} [nav]")
     if nav.detector not in detectors.DETECTORS:
         raise ScenarioError(f"{scenario.source} [nav]: detector = {nav.detector!r}; allowed: {detectors.DETECTORS}")
     if nav.states not in (9, 15, 24):
@@ -125,6 +130,7 @@ def settings_from_scenario(scenario: Scenario) -> tuple[NavSettings, ExperimentS
                 raise ScenarioError(f"{scenario.source} [experiment]: {key} = {value!r} must be a non-empty list")
             lists[key] = tuple(kind(v) for v in value)
     exp = dataclasses.replace(fill(ExperimentSettings, table, f"{scenario.source} [experiment]"), **lists)
+    check_ranges("experiment", dataclasses.asdict(exp), f"{scenario.source} [experiment]")
     return nav, exp
 
 

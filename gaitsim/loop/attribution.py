@@ -2,14 +2,15 @@
 
 :func:`run_loop` does, for one recording:
 
-1. navigate it with the shared filter (:data:`gaitsim.loop.settings.NAV_OPTIONS`) and score it against its
-   reference; compute its signature (:mod:`gaitsim.loop.signature`);
+0. check it (:func:`nav.checks.check_recording`: NaN, timestamps, units) and its sensor frame
+   (:mod:`gaitsim.loop.frame`, after an optional ``--axes`` map): a bad input is an error, never fitted;
+1. navigate it with the shared filter (:data:`gaitsim.loop.settings.NAV_OPTIONS`) and score it against the
+   reference it has (:mod:`gaitsim.loop.navigation`: a track, start and end, a walked distance, or none);
+   compute its signature (:mod:`gaitsim.loop.signature`);
 2. fit the twin (:mod:`gaitsim.loop.twin`), simulate it, treat the simulation as a measured recording (IMU
    samples and a position reference only) and do the same;
-3. residuals = recording - twin: the signature residuals plus the navigation residuals ``nav_length_ratio``
-   (stride length ratio against a continuous reference, :func:`nav.metrics.stride_length_ratio`, else the
-   start-to-end length ratio), ``nav_heading_drift``
-   (deg/s) and ``nav_final_error`` (m). Every residual's uncertainty includes what the twin fit alone gets
+3. residuals = recording - twin: the signature residuals plus the navigation residuals its reference allows
+   (:mod:`gaitsim.loop.navigation`: ``nav_length_ratio``, ``nav_heading_drift`` deg/s, ``nav_final_error`` m). Every residual's uncertainty includes what the twin fit alone gets
    wrong, measured on a twin of the twin (:func:`comparison_noise`); a navigation residual's also the
    standard deviation of the twin's value over ``settings.NAV_REPEATS`` re-simulations with other seeds (gait
    variability and sensor noise), at least its ``settings.NAV_FLOOR``;
@@ -25,9 +26,10 @@
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
 5. the effect explaining the most is added to the twin when it explains at least ``settings.EXPLAINED_FRACTION``,
-   lowers Q, and does no harm: no other residual, navigation included, may grow by more than
-   ``settings.NOISE_LEVEL`` in z to above it (an effect that trades one residual for another is not what the recording
-   shows). An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
+   lowers Q, and does no harm: no other residual, navigation included, that was at the noise level may end
+   beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
+   recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
+   at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
    Steps 4-5 repeat for at most ``settings.MAX_ROUNDS`` residuals.
@@ -46,24 +48,27 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from nav import pipeline
+from nav.checks import check_recording
 from nav.recording import Recording, RecordingError
 
 from ..measured.reference import as_measured, reference_track
 from . import effects as fx
 from . import residuals, settings
 from . import twin as tw
+from .frame import FrameCheck, require_body_frame
+from .navigation import NAV_UNITS, NavReference, nav_reference, navigation_metrics, same_kind
+from .progress import Progress
 from .residuals import Residual
 from .signature import Signature, signature
-
-NAV_UNITS = {"nav_length_ratio": "1", "nav_heading_drift": "deg/s", "nav_final_error": "m"}
 
 
 @dataclass
 class Side:
-    """One recording as the loop sees it: the recording, its signature and its navigation metrics."""
+    """One recording as the loop sees it: the recording, its reference kind, its signature and its navigation
+    metrics (those the reference kind allows)."""
 
     recording: Recording
+    reference: NavReference
     signature: Signature
     nav: dict
     solution: object = None
@@ -83,6 +88,7 @@ class LoopResult:
     attributions: list
     noise: dict
     context: dict = field(default_factory=dict)
+    frame: FrameCheck | None = None
 
     def navigation_summary(self) -> dict:
         """Per navigation metric: measured, twin before/after and the discrepancy |twin - measured| before/after."""
@@ -96,39 +102,24 @@ class LoopResult:
         return out
 
 
-def navigation_metrics(rec: Recording) -> tuple[dict, object]:
-    """Navigate ``rec`` and return (metrics, solution): nav_length_ratio, nav_heading_drift, nav_final_error."""
-    sol, score = pipeline.run(rec, settings.NAV_OPTIONS)
-    ratio = score.get("stride_length_ratio" if len(rec.reference.t) > 2 else "length_ratio", math.nan)
-    drift = score.get("heading_drift_deg_per_s", math.nan)
-    metrics = {"nav_length_ratio": float(ratio) if ratio is not None else math.nan,
-               "nav_heading_drift": float(drift) if drift is not None else math.nan,
-               "nav_final_error": float(score.get("final_error_m", math.nan))}
-    return metrics, sol
-
-
-def measure(rec: Recording, with_nav: bool = True) -> Side:
+def measure(rec: Recording, ref: NavReference, with_nav: bool = True) -> Side:
     """Signature (with the continuous reference's track, its detector at the recording's gravity,
-    :attr:`nav.recording.Recording.gravity`) and, optionally, navigation metrics of ``rec``."""
-    pos_t, pos = reference_track(rec)
+    :attr:`nav.recording.Recording.gravity`) and, optionally, the navigation metrics ``ref`` allows."""
+    pos_t, pos = reference_track(rec) if ref.kind == "track" else (None, None)
     sig = signature(rec.t, rec.acc, rec.gyr, pos_t, pos, rec.gravity)
     if not with_nav:
-        return Side(rec, sig, {})
-    nav, sol = navigation_metrics(rec)
-    return Side(rec, sig, nav, sol)
+        return Side(rec, ref, sig, {})
+    nav, sol = navigation_metrics(rec, ref)
+    return Side(rec, ref, sig, nav, sol)
 
 
 def simulate_side(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, with_nav: bool,
                   seed: int | None = None) -> Side:
     """Simulate the twin and measure it like the recording (same kind of reference)."""
-    sim = as_measured(simulate(twin, seed))
-    if reference_track(measured.recording)[0] is None:  # start and end only, inside the IMU's span (a
-        # time skew drops samples at both ends)
-        inside = np.flatnonzero((sim.reference.t >= sim.t[0]) & (sim.reference.t <= sim.t[-1]))[[0, -1]]
-        sim.reference.t, sim.reference.pos = sim.reference.t[inside], sim.reference.pos[inside]
+    sim = same_kind(as_measured(simulate(twin, seed)), measured.reference)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # input checks on candidate twins (e.g. clipping) are expected
-        return measure(sim, with_nav)
+        return measure(sim, measured.reference, with_nav)
 
 
 def compare(measured: Side, twin: Side, noise: dict) -> dict:
@@ -142,29 +133,33 @@ def compare(measured: Side, twin: Side, noise: dict) -> dict:
     return out
 
 
-def comparison_noise(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side) -> dict:
-    """What a comparison with this twin is uncertain by beyond the stride-to-stride scatter (name -> value).
+def comparison_noise(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, progress: Progress) -> dict:
+    """What a comparison with this twin is uncertain by beyond the stride-to-stride scatter (name -> value),
+    calibrated on the twin itself: it is simulated with ``settings.NAV_REPEATS`` other seeds and every pair of
+    those simulations is compared as recording and twin would be (same model, so only chance differs).
 
-    - **Fit floor** of every residual: the twin is simulated with another seed and treated as a recording
-      (``settings.TWIN_OF_TWIN_SEED``), a twin is fitted to it the same way, and the residuals between the two are what
-      the fit alone gets wrong (both sides come from the same model, so nothing else differs); the floor is
-      their rms over ``settings.TWIN_OF_TWIN_REPEATS`` such pairs.
-    - **Navigation**: the standard deviation of the twin's navigation metrics over ``settings.NAV_REPEATS`` seeds
-      combined with their fit floor, at least ``settings.NAV_FLOOR``.
+    - **Signature residuals**: the floor is what the pairs' residuals show beyond their own stride scatter,
+      ``sqrt(max(0, mean(value^2 - se^2)))`` (``se`` the pair's combined standard error): the part of the
+      chance difference between two walks that the per-stride standard errors miss (e.g. a profile averaged
+      over few, unevenly cut strides). With it, a residual's z is ~1 between two simulations of one model.
+    - **Navigation**: the standard deviation of the twin's navigation metrics over those seeds, at least
+      ``settings.NAV_FLOOR``.
     """
-    squares = {}
-    for k in range(settings.TWIN_OF_TWIN_REPEATS):
-        pseudo = simulate_side(simulate, twin, measured, True, twin.seed + settings.TWIN_OF_TWIN_SEED + k)
-        refit = tw.fit_twin(pseudo.recording, pseudo.signature, pseudo.solution, simulate)
-        for name, r in compare(pseudo, simulate_side(simulate, refit, measured, True), {}).items():
-            if math.isfinite(r.value):
-                squares.setdefault(name, []).append(r.value ** 2)
-    floors = {name: float(math.sqrt(np.mean(v))) for name, v in squares.items()}
-    values = [simulate_side(simulate, twin, measured, True, twin.seed + 1 + k).nav
-              for k in range(settings.NAV_REPEATS)]
-    for key, least in settings.NAV_FLOOR.items():
-        spread = np.nanstd([v[key] for v in values], ddof=1)
-        floors[key] = float(max(math.hypot(np.nan_to_num(spread), floors.get(key, 0.0)), least))
+    progress.stage("calibrating the comparison noise on the twin", settings.NAV_REPEATS)
+    sides = []
+    for k in range(settings.NAV_REPEATS):
+        sides.append(simulate_side(simulate, twin, measured, True, twin.seed + settings.TWIN_OF_TWIN_SEED + k))
+        progress.step("simulations of the twin with other seeds")
+    excess = {}
+    for i in range(len(sides)):
+        for j in range(i + 1, len(sides)):
+            for name, r in residuals.compare(sides[i].signature, sides[j].signature).items():
+                if math.isfinite(r.value):
+                    excess.setdefault(name, []).append(r.value ** 2 - r.uncertainty ** 2)
+    floors = {name: float(math.sqrt(max(0.0, np.mean(v)))) for name, v in excess.items()}
+    for key in measured.nav:
+        spread = np.nanstd([s.nav.get(key, math.nan) for s in sides], ddof=1)
+        floors[key] = float(max(np.nan_to_num(spread), settings.NAV_FLOOR[key]))
     return floors
 
 
@@ -221,8 +216,8 @@ def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, mea
 def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
                    ctx: dict, noise: dict) -> Fit:
     """One magnitude search of ``effect`` in context ``ctx``: grid, then bounded Brent around the best point."""
-    use_nav = any(name.startswith("nav_") for name in effect.moves)
-    names = [n for n in base if n in effect.moves]
+    use_nav = all(name.startswith("nav_") for name in effect.moves)  # navigated only when that is all it moves
+    names = [n for n in base if n in effect.moves and (use_nav or not n.startswith("nav_"))]
     low, high = effect.search_bounds(ctx)
     cache = {}
 
@@ -261,12 +256,14 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
 
 
 def judged(fit: Fit, base: dict, acted: str) -> Fit:
-    """``fit`` with the fraction of ``acted`` it explains and the other residuals it makes worse."""
+    """``fit`` with the fraction of ``acted`` it explains and the other residuals it makes worse: at the noise
+    level before, beyond ``settings.HARM_FACTOR`` times it after (a residual that was already off may move
+    either way while another effect remains to be found)."""
     res = fit.residuals
     before, after = abs(base[acted].value), abs(res[acted].value) if acted in res else math.inf
     fraction = 1.0 - after / before if before > 0 else 0.0
     harmed = tuple(n for n in res if n != acted and n in base
-                   and res[n].z > settings.NOISE_LEVEL and res[n].z > base[n].z + settings.NOISE_LEVEL)
+                   and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed)
 
 
@@ -290,14 +287,44 @@ def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list)
     }
 
 
+def prepare(rec: Recording, axis_map: str | None = None, distance_m: float | None = None) -> tuple[
+        Recording, FrameCheck, NavReference]:
+    """Step 0 of the module docstring: the recording checked (:func:`nav.checks.check_recording`), in the body
+    frame (:func:`gaitsim.loop.frame.require_body_frame`, after ``axis_map``), and its reference kind (a
+    simulated recording without a reference is scored against its true track).
+
+    Raises
+    ------
+    RecordingError
+        naming what is wrong with the recording (NaN, timestamps, units, frame) or with ``distance_m``.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the non-fatal findings are kept in the report's counts
+        check_recording(rec, rec.gravity, name=str(rec.meta.get("source", "imu.csv")))
+    mapped, frame = require_body_frame(rec, axis_map)
+    if mapped.reference is None and mapped.truth is not None:  # a simulated recording: its truth is the reference
+        mapped = dataclasses.replace(mapped, reference=as_measured(mapped).reference)
+    return mapped, frame, nav_reference(mapped, distance_m)
+
+
 def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = settings.MAX_ROUNDS,
-             log=lambda message: None) -> LoopResult:
-    """The whole loop on one recording (module docstring). ``log`` receives progress lines."""
+             log=lambda message: None, axis_map: str | None = None, distance_m: float | None = None) -> LoopResult:
+    """The whole loop on one recording (module docstring). ``log`` receives progress lines; ``axis_map`` is the
+    ``--axes`` map and ``distance_m`` the ``--distance`` of the command line.
+
+    Raises
+    ------
+    RecordingError
+        for a recording the loop cannot use (:func:`prepare`; too few regular strides).
+    """
+    progress = Progress(log)
+    rec, frame, ref = prepare(rec, axis_map, distance_m)
     simulate = tw.TwinSimulator()
-    measured = measure(rec)
-    log(f"navigated the recording: {measured.nav}")
+    measured = measure(rec, ref)
+    progress.note(f"navigated the recording ({ref.kind} reference): {measured.nav}")
     base_twin = tw.fit_twin(rec, measured.signature, measured.solution, simulate)
-    noise = comparison_noise(simulate, base_twin, measured)
+    progress.note("fitted the twin")
+    noise = comparison_noise(simulate, base_twin, measured, progress)
     before = simulate_side(simulate, base_twin, measured, True)
     current_twin, current_side = base_twin, before
     current = compare(measured, before, noise)
@@ -306,7 +333,7 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
     fitted = {}  # effect name -> its fit to the current twin (an effect's fit depends on the twin, not on the
     # residual acted on: fitted once per twin)
     ctx = fx.context(rec, base_twin.scenario, measured.signature, before.signature)
-    for _ in range(max_rounds):
+    for round_number in range(1, max_rounds + 1):
         ranked = sorted((r for r in current.values() if r.name not in acted_names
                          and r.name not in settings.DERIVED and r.z > settings.NOISE_LEVEL),
                         key=lambda r: (r.name.startswith("nav_"), -r.z))
@@ -316,18 +343,21 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
         acted_names.add(acted.name)
         ctx = fx.context(rec, current_twin.scenario, measured.signature, current_side.signature)
         candidates = [e for e in library if acted.name in e.moves and e.name not in used and fx.applicable(e, ctx)]
+        progress.stage(f"round {round_number}, {acted.name} (z = {acted.z:.1f})", len(candidates))
         fits = []
         for e in candidates:
             if e.name not in fitted:
                 fitted[e.name] = fit_effect(simulate, e, current_twin, measured, current, acted.name, ctx, noise,
                                             lambda scenario, sig: fx.context(rec, scenario, measured.signature, sig))
             fits.append(judged(fitted[e.name], current, acted.name))
+            progress.step(f"effects fitted ({e.name})")
         ranked_fits = sorted(fits, key=lambda f: (f.acceptable, f.fraction, -f.q_after), reverse=True)
         best = ranked_fits[0] if ranked_fits else None
         accepted = best is not None and best.acceptable
         attributions.append(_record(acted, best, accepted, fits))
-        log(f"{acted.name} (z = {acted.z:.1f}): " + (f"{best.effect.name} = {best.magnitude:.4g} {best.effect.unit}, "
-                                                     f"explains {best.fraction:.0%}" if accepted else "unexplained"))
+        progress.note(f"round {round_number}, {acted.name}: " + (
+            f"{best.effect.name} = {best.magnitude:.4g} {best.effect.unit}, explains {best.fraction:.0%}"
+            if accepted else "unexplained"))
         if accepted:
             used.add(best.effect.name)
             fitted = {}
@@ -335,4 +365,4 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
             current_side = simulate_side(simulate, current_twin, measured, True)
             current = compare(measured, current_side, noise)
     return LoopResult(measured, base_twin, current_twin, before, current_side, first, current, attributions,
-                      noise, ctx)
+                      noise, ctx, frame)

@@ -3,9 +3,15 @@
 DATASET is a shared dataset name (``gaitmap-healthy``, ``ucr-fgo``, ``xio-ngimu``; each recording of it gets
 its own sub-folder), ``blind`` (the blind-test table of :mod:`gaitsim.loop.blind`), ``all`` (the three datasets
 and ``blind``, one sub-folder each: ``gaitsim loop all --out results/loop`` regenerates the committed results),
-or a recording folder (or a folder of ``run-NNN`` recordings). Every recording's folder gets ``report.md``,
-``attribution.json`` and figures; DIR gets a ``README.md`` summary. Written atomically: nothing appears at DIR
-if anything fails.
+or a recording folder (or a folder of ``run-NNN`` recordings) with whatever reference it has: a
+``reference.csv`` track, start and end only (a loop closure), a walked distance (``--distance M``), or none
+(signatures only). ``--axes y,-x,z`` maps the sensor axes into the body frame first (body x = sensor y, ...);
+a recording whose frame is not x toes, y left, z up is refused with the map to use.
+
+Every recording's folder gets ``report.md``, ``attribution.json``, ``twin.toml`` (the fitted twin, which
+``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A recording the loop cannot use is a
+failure: its folder holds a ``report.md`` saying why, the summary lists it, the other recordings go on, and the
+command exits 1. Written atomically: nothing appears at DIR when every recording failed.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from nav.recording import RecordingError, list_runs, read_recording
 from ..measured import load_dataset
 from ..numbers import shown
 from . import attribution, blind, report, settings
+from .axes import parse_axes
 
 DATASETS = ("gaitmap-healthy", "ucr-fgo", "xio-ngimu")
 CHOICES = DATASETS + ("blind", "all")
@@ -35,77 +42,114 @@ def add_parser(subparsers) -> None:
                    help=f"largest number of residuals acted on per recording (default {settings.MAX_ROUNDS})")
     p.add_argument("--data", default=None, help="folder holding the shared datasets (default: $GAITSIM_DATA or "
                                                 "../shared/data)")
+    p.add_argument("--axes", default=None, help="sensor axes as body x,y,z, e.g. 'y,-x,z' (default: as recorded)")
+    p.add_argument("--distance", type=float, default=None, metavar="M",
+                   help="walked distance (m) of a recording folder, compared with the navigated length")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
     p.set_defaults(func=run)
 
 
 def _recordings(dataset: str, data_root) -> list[tuple[str, object]]:
+    """(label, reader) per recording of ``dataset``; a reader returns the Recording (a folder's recordings are
+    read one by one, so that one unreadable run fails alone)."""
     if dataset in DATASETS:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the loaders' data-quality warnings are in each recording's meta
             recs = load_dataset(dataset, data_root)
-        return [(str(r.meta.get("recording", i)), r) for i, r in enumerate(recs)]
-    folder = Path(dataset)
-    if not folder.is_dir():
-        raise RecordingError(f"loop: {dataset!r} is neither a dataset ({', '.join(CHOICES)}) nor a recording folder")
-    runs = list_runs(folder)
-    return [(p.name if len(runs) > 1 else "recording", read_recording(p)) for p in runs]
+        return [(str(r.meta.get("recording", i)), lambda r=r: r) for i, r in enumerate(recs)]
+    runs = list_runs(Path(dataset))
+    return [(p.name if len(runs) > 1 else "recording", lambda p=p: read_recording(p)) for p in runs]
 
 
 def _summary_line(label: str, doc: dict) -> str:
     effects = ", ".join(f"{a['residual']} -> {a['effect']}" + (f" {a['magnitude']:.4g} {a['magnitude_unit']}"
                                                                 if a["magnitude"] is not None else "")
                         for a in doc["attributions"]) or "no residual above the noise level"
+    if not doc["navigation"]:
+        return f"| {label} | {effects} | no reference: signatures only | |"
     nav = doc["navigation"].get("nav_length_ratio") or doc["navigation"].get("nav_final_error") or {}
     name = "length ratio" if "nav_length_ratio" in doc["navigation"] else "final error (m)"
     return (f"| {label} | {effects} | {name}: {shown(nav.get('measured'))} | "
             f"{shown(nav.get('discrepancy_before'))} -> {shown(nav.get('discrepancy_after'))} |")
 
 
-def _run_recordings(dataset: str, folder: Path, rounds: int, data_root) -> list[str]:
-    lines = []
-    for label, rec in _recordings(dataset, data_root):
+def _failure_report(title: str, exc: Exception) -> str:
+    kind = "input error" if isinstance(exc, ValueError) else f"internal error ({type(exc).__name__})"
+    return f"# Sim-to-real loop: {title}\n\nThe loop could not run ({kind}): {exc}\n"
+
+
+def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[str]]:
+    """Run the loop on every recording of ``dataset``; returns the summary lines and the failures."""
+    lines, failures = [], []
+    try:
+        recordings = _recordings(dataset, args.data)
+    except (ValueError, OSError) as exc:
+        return [f"| {dataset} | could not be read: {exc} | | |"], [f"{dataset}: {exc}"]
+    for label, read in recordings:
         started = time.time()
         sub = folder / label
         sub.mkdir(parents=True)
         try:
-            result = attribution.run_loop(rec, max_rounds=rounds, log=lambda m, lab=label: print(f"  [{lab}] {m}"))
-        except (ValueError, RecordingError) as exc:  # one unusable recording must not stop the others
-            (sub / "report.md").write_text(f"# Sim-to-real loop: {dataset} / {label}\n\nThe loop could not run: {exc}\n")
-            lines.append(f"| [{label}]({label}/report.md) | loop failed: {exc} | | |")
-            print(f"{dataset} {label}: FAILED: {exc}")
+            result = attribution.run_loop(read(), max_rounds=args.rounds, axis_map=args.axes, distance_m=args.distance,
+                                          log=lambda m, lab=label: print(f"  [{lab}] {m}", flush=True))
+            doc = report.write_result(result, sub, f"{dataset} / {label}")
+        except Exception as exc:  # noqa: BLE001 -- any failure of one recording is reported, the others go on
+            (sub / "report.md").write_text(_failure_report(f"{dataset} / {label}", exc))
+            lines.append(f"| [{label}]({label}/report.md) | FAILED: {exc} | | |")
+            failures.append(f"{dataset} / {label}: {exc}")
+            print(f"{dataset} {label}: FAILED: {exc}", flush=True)
             continue
-        doc = report.write_result(result, sub, f"{dataset} / {label}")
         lines.append(_summary_line(f"[{label}]({label}/report.md)", doc))
-        print(f"{dataset} {label}: done in {time.time() - started:.1f} s")
-    return lines
+        print(f"{dataset} {label}: done in {time.time() - started:.1f} s", flush=True)
+    return lines, failures
 
 
 def _run_blind(folder: Path) -> list[str]:
-    rows = []
-    for case in blind.CASES:
-        result = blind.run_case(case)
-        rows += blind.table_rows(case, result)
-        print(f"blind {case.name}: {[a['effect'] for a in result.attributions]}")
+    """The blind table (:mod:`gaitsim.loop.blind`) of every sensor into ``folder``/blind.md and blind.json."""
+    rows, summary = [], []
+    for sensor in blind.SENSORS:
+        untouched = blind.named_effects(blind.run(sensor, None))
+        print(f"blind {sensor} untouched: {untouched}", flush=True)
+        found = []
+        for case in blind.CASES:
+            row = {"sensor": sensor, "untouched_named": untouched, **blind.verdict(case, blind.run(sensor, case),
+                                                                                   untouched)}
+            rows.append(row)
+            found.append(row["found"])
+            print(f"blind {sensor} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
+        inside = [f for f, c in zip(found, blind.CASES) if c.named != ("unexplained",)]
+        summary.append(f"{sensor}: {sum(inside)} of {len(inside)} library effects named within "
+                       f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}; outside effect unexplained: {found[-1]}")
     write_json(folder / "blind.json", rows)
-    lines = ["# Blind tests", "", blind.__doc__.strip(), "",
-             "| case | true effect | true magnitude | found | fitted | residual | before | after (uncertainty) | "
-             "nav final-error discrepancy before -> after (m) |", "|---|---|---|---|---|---|---|---|---|"]
+    lines = ["# Blind tests", "", blind.__doc__.strip(), ""] + [f"- {line}" for line in summary] + [
+        "", "| sensor | case | injected | expected | named beyond the untouched recording | found |",
+        "|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['case']} | {r['true_effect']} | {shown(r['true_magnitude'])} {r['unit']} | "
-                     f"{r['found_effect']} | {shown(r['fitted_magnitude'])} | {r['residual']} | "
-                     f"{shown(r['residual_before'])} | {shown(r['residual_after'])} ({shown(r['uncertainty_after'])}) | "
-                     f"{shown(r['nav_final_error_discrepancy_before_m'])} -> "
-                     f"{shown(r['nav_final_error_discrepancy_after_m'])} |")
+        named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
+        if r["unexplained_residuals"]:
+            named += f"; unexplained: {', '.join(r['unexplained_residuals'])}"
+        lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
+                     f"{shown(r['expected_magnitude'])} | {named} | {'yes' if r['found'] else 'no'} |")
+    lines += ["", "Named on the untouched recordings (subtracted): " + "; ".join(
+        f"{s}: {rows[i * len(blind.CASES)]['untouched_named']}" for i, s in enumerate(blind.SENSORS))]
     (folder / "blind.md").write_text("\n".join(lines) + "\n")
-    return [f"| [blind tests](blind.md) | {len(blind.CASES)} cases | | |"]
+    return [f"| [blind tests](blind.md) | {'; '.join(summary)} | | |"]
 
 
 def run(args) -> int:
-    """Run the loop as the command line asked; returns the exit code."""
+    """Run the loop as the command line asked; returns the exit code (1 when any recording failed)."""
     if args.rounds < 1:
         raise ValueError(f"--rounds {args.rounds}: must be >= 1")
+    if args.axes is not None:
+        parse_axes(args.axes)  # a malformed map is refused before anything runs
+    if args.distance is not None and args.dataset in CHOICES:
+        raise ValueError(f"--distance applies to a recording folder, not to {args.dataset!r} (its recordings carry "
+                         "their own references)")
+    if args.dataset not in CHOICES and not Path(args.dataset).is_dir():
+        raise RecordingError(f"loop: {args.dataset!r} is neither a dataset ({', '.join(CHOICES)}) nor a recording "
+                             "folder")
     targets = list(DATASETS) + ["blind"] if args.dataset == "all" else [args.dataset]
+    failures, recordings = [], 0
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
         lines = ["# Sim-to-real loop results", "", f"Regenerate with `gaitsim loop {args.dataset} --out DIR`.", "",
                  "| recording | residual -> effect (fitted) | navigation metric (measured) | "
@@ -114,8 +158,26 @@ def run(args) -> int:
             folder = tmp / target if len(targets) > 1 else tmp
             folder.mkdir(parents=True, exist_ok=True)
             prefix = f"{target}/" if len(targets) > 1 else ""
-            found = _run_blind(folder) if target == "blind" else _run_recordings(target, folder, args.rounds, args.data)
+            if target == "blind":
+                found, failed = _run_blind(folder), []
+            else:
+                found, failed = _run_recordings(target, folder, args)
+            recordings += len(found)
+            failures += failed
             lines += [line.replace("](", f"]({prefix}", 1) for line in found]
+        if failures:
+            lines += ["", f"**{len(failures)} recording(s) failed:**", ""] + [f"- {f}" for f in failures]
         (tmp / "README.md").write_text("\n".join(lines) + "\n")
-    print(f"written to {args.out}")
-    return 0
+        if failures and len(failures) == recordings:
+            raise LoopFailed(failures)
+    print(f"written to {args.out}" + (f"; {len(failures)} recording(s) FAILED:" if failures else ""))
+    for f in failures:
+        print(f"  {f}")
+    return 1 if failures else 0
+
+
+class LoopFailed(ValueError):
+    """Every recording failed: nothing is written (the message lists why)."""
+
+    def __init__(self, failures: list[str]):
+        super().__init__("every recording failed (nothing written): " + "; ".join(failures))

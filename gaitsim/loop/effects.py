@@ -16,8 +16,16 @@ re-run the sensor model on the cached walk).
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
 | accel_scale | [sensor] accel_misalignment = (1 + s) I | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
-| g_sensitivity | [sensor] gyro_g_sensitivity = k I | deg/s/(m/s^2) | nav_heading_drift |
+| bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
+| gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one diagonal entry 1 + s | % | stride closure, gyro profiles, navigation |
+| accel_scale_x, _y, _z | [sensor] accel_misalignment, one diagonal entry 1 + s | % | stride closure, rest_acc_norm, acc profiles, navigation |
+| g_sensitivity | [sensor] gyro_g_sensitivity = k I | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
+
+The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, time and
+g-sensitivity errors apart: each turns gravity or the specific force its own way while the foot pitches. The
+``rest_gyro_change`` and ``rest_acc_change`` residuals (a sensor drift between the first and the last rest) are
+moved by no effect: a drifting bias is outside the library and is reported unexplained.
 
 Roll and pitch of the sensor on the foot are part of the twin's mount fit (gravity at rest), so the library's
 misalignment is the remaining yaw. A fitted magnitude equal to the twin's current value means "no change".
@@ -41,6 +49,8 @@ from .signature import Signature
 
 ACC_PROFILES = ("profile_acc_x", "profile_acc_y", "profile_acc_z")
 GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
+CLOSURE = ("closure_forward", "closure_left", "closure_up", "closure_roll", "closure_pitch")
+NAV = ("nav_length_ratio", "nav_heading_drift", "nav_final_error")
 
 
 @dataclass(frozen=True)
@@ -130,6 +140,13 @@ def _sensor(**items) -> dict:
     return {"sensor": items}
 
 
+def _scaled_axis(matrix, axis: int, percent: float) -> list:
+    """The twin's 3x3 sensor matrix with its ``axis`` diagonal entry set to 1 + ``percent`` / 100."""
+    out = np.array(matrix, float)
+    out[axis, axis] = 1.0 + percent / 100.0
+    return out.tolist()
+
+
 LIBRARY: tuple[Effect, ...] = (
     Effect("stance_creep", "forward creep of the foot during foot flat (stance micro-motion magnitude)",
            "[micromotion] creep_velocity_mps", "m/s", ("stance_velocity", "nav_length_ratio"), (-0.02, 0.06),
@@ -149,13 +166,15 @@ LIBRARY: tuple[Effect, ...] = (
            ("onset_hf", "hf40", "hf80", "acc_peak", "stance_acc_spread", "stance_duration"),
            (0.0, 300.0),
            lambda m, ctx: {"impact": {"ringing_hz": ctx["ringing_hz"], "ringing_accel_mps2": m}}),
-    Effect("bandwidth", "low-pass of the sensor (Butterworth, same cutoff on both sensors)",
-           "[sensor] accel_bandwidth, gyro_bandwidth", "Hz",
-           ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag", "stance_acc_spread", "stance_duration")
-           + ACC_PROFILES + GYR_PROFILES, (8.0, 400.0),
-           lambda m, ctx: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"]), log_scale=True),
+    *(Effect(name, f"low-pass of the sensor (Butterworth of order {order}, same cutoff on both sensors)",
+             "[sensor] accel_bandwidth, gyro_bandwidth, filter_order", "Hz",
+             ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag", "stance_acc_spread",
+              "stance_duration") + ACC_PROFILES + GYR_PROFILES + CLOSURE, (8.0, 400.0),
+             lambda m, ctx, order=order: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"],
+                                                 filter_order=order), log_scale=True)
+      for name, order in (("bandwidth", 2), ("bandwidth_first_order", 1))),
     Effect("accel_gyro_skew", "time skew between accelerometer and gyro sampling (> 0: gyro later)",
-           "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES, (-20.0, 20.0),
+           "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES + CLOSURE, (-20.0, 20.0),
            lambda m, ctx: _sensor(accel_gyro_skew=[m, "ms"]),
            lambda res, ctx: None if _value(res, "acc_gyro_lag") is None else -_value(res, "acc_gyro_lag")),
     Effect("mount_yaw", "yaw of the sensor axes on the foot (misalignment left after the gravity-based tilt)",
@@ -164,12 +183,20 @@ LIBRARY: tuple[Effect, ...] = (
            lambda m, ctx: _sensor(mounting_misalignment=[[*ctx["mount_roll_pitch_rad"], math.radians(m)], "rad"]),
            lambda res, ctx: _value(res, "swing_axis_yaw")),
     Effect("accel_scale", "accelerometer scale factor error, equal on the three axes",
-           "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES, (-5.0, 5.0),
+           "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES + CLOSURE,
+           (-5.0, 5.0),
            lambda m, ctx: _sensor(accel_misalignment=[(np.eye(3) * (1.0 + m / 100.0)).tolist(), "1"]),
            _scale_guess),
-    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I)",
-           "[sensor] gyro_g_sensitivity", "deg/s/(m/s^2)", ("nav_heading_drift",), (-0.02, 0.02),
-           lambda m, ctx: _sensor(gyro_g_sensitivity=[(np.eye(3) * m).tolist(), "deg/s/(m/s^2)"])),
+    *(Effect(f"{sensor}_scale_{axis}", f"{label} scale factor error of the sensor's {axis} axis alone",
+             f"[sensor] {sensor}_misalignment[{i}][{i}]", "%", CLOSURE + profiles + NAV + extra, (-6.0, 6.0),
+             lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}))
+      for sensor, label, profiles, extra in (("gyro", "gyro", GYR_PROFILES, ()),
+                                             ("accel", "accelerometer", ACC_PROFILES, ("rest_acc_norm",)))
+      for i, axis in enumerate("xyz")),
+    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's)",
+           "[sensor] gyro_g_sensitivity", "deg/s/(m/s^2)", ("closure_roll", "closure_pitch") + NAV, (-0.05, 0.05),
+           lambda m, ctx: _sensor(gyro_g_sensitivity=[(np.asarray(ctx["gyro_g_sensitivity"]) + np.eye(3) * m).tolist(),
+                                                      "deg/s/(m/s^2)"])),
     Effect("saturation", "accelerometer range limit (clipping)", "[sensor] accel_range", "m/s^2",
            ("acc_peak", "hf40", "hf80", "onset_hf") + ACC_PROFILES, (20.0, 400.0),
            lambda m, ctx: _sensor(accel_range=[m, "m/s^2"]),
@@ -232,7 +259,11 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
             "creep_velocity_mps": list(micro["creep_velocity_mps"]),
             "creep_mps": float(micro["creep_velocity_mps"][0]),
             "stance_roll_rate_dps": float(micro["stance_roll_rate_dps"]),
-            "mount_roll_pitch_rad": [float(roll), float(pitch)]}
+            "mount_roll_pitch_rad": [float(roll), float(pitch)],
+            **{key: (np.asarray(twin.sensor[key]) if twin.sensor is not None else np.eye(3)).tolist()
+               for key in ("gyro_misalignment", "accel_misalignment")},
+            "gyro_g_sensitivity": np.degrees(np.asarray(twin.sensor["gyro_g_sensitivity"])
+                                             if twin.sensor is not None else np.zeros((3, 3))).tolist()}
 
 
 def applicable(effect: Effect, ctx: dict) -> bool:

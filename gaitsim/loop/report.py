@@ -1,10 +1,11 @@
-"""Write one loop result: ``attribution.json``, ``report.md`` and figures (``*.png``) into a folder.
+"""Write one loop result: ``attribution.json``, ``report.md``, ``twin.toml`` and figures (``*.png``) into a folder.
 
 ``attribution.json`` holds, per residual acted on, the effect named (or ``"unexplained"``), the scenario key,
 the fitted magnitude and unit, the residual before and after with uncertainties, whether it is at the noise
 level after, the fraction explained and every candidate tried; then the predicted-versus-measured navigation
 metrics before and after, all residuals before and after, and the fitted twin (its scenario document, which a
-user can save as TOML and simulate).
+user can save as TOML and simulate). ``twin.toml`` is the twin after all accepted effects as a scenario file
+(``gaitsim generate twin.toml --out DIR`` simulates it).
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ from nav.files import jsonable, write_json  # noqa: E402
 from ..numbers import shown  # noqa: E402
 from . import attribution as att  # noqa: E402
 from . import settings  # noqa: E402
+from .residuals import profile_fit  # noqa: E402
+from .twin_file import write_twin_toml  # noqa: E402
 from .signature import CHANNELS  # noqa: E402
 
 
@@ -30,6 +33,10 @@ def attribution_document(result: att.LoopResult, label: str) -> dict:
     return jsonable({
         "recording": label,
         "noise_level": f"|residual| <= {settings.NOISE_LEVEL} x uncertainty",
+        "reference": {"kind": result.measured.reference.kind, "distance_m": result.measured.reference.distance_m,
+                      "what_is_compared": result.measured.reference.describe()},
+        "sensor_frame": {"axes": result.measured.recording.meta.get("axes", "x,y,z"),
+                         "numbers": result.frame.numbers if result.frame is not None else None},
         "explained_threshold": settings.EXPLAINED_FRACTION,
         "attributions": result.attributions,
         "navigation": result.navigation_summary(),
@@ -37,6 +44,8 @@ def attribution_document(result: att.LoopResult, label: str) -> dict:
         "residuals_before": {k: r.as_dict() for k, r in result.residuals_before.items()},
         "residuals_after": {k: r.as_dict() for k, r in result.residuals_after.items()},
         "effect_context": result.context,
+        "profile_fit_before": profile_fit(result.measured.signature, result.before.signature),
+        "profile_fit_after": profile_fit(result.measured.signature, result.after.signature),
         "twin_before": {"scenario": result.twin_before.document(), "fit_notes": result.twin_before.notes},
         "twin_after": {"scenario": result.twin_after.document()},
     })
@@ -115,11 +124,18 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
     if not result.attributions:
         lines.append("| (no residual above the noise level) | | | | | | | |")
     lines += ["", "## Navigation: predicted (twin) versus measured", "",
+              f"Reference: {result.measured.reference.describe()}.", "",
               "| metric | measured | twin before | twin after | discrepancy before | discrepancy after |",
               "|---|---|---|---|---|---|"]
     for key, v in result.navigation_summary().items():
         lines.append(f"| {key} ({v['unit']}) | {shown(v['measured'])} | {shown(v['twin_before'])} | "
                      f"{shown(v['twin_after'])} | {shown(v['discrepancy_before'])} | {shown(v['discrepancy_after'])} |")
+    lines += ["", f"## Phase profiles: twin within {settings.PROFILE_SPREAD_FACTOR:g}x the recording's "
+              "stride-to-stride spread?", "", "| channel | share of phases within | largest ratio | phases beyond (% of "
+              "stride) |", "|---|---|---|---|"]
+    for channel, fit in profile_fit(result.measured.signature, result.after.signature).items():
+        runs = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in fit["phases_beyond_pct"]) or "none"
+        lines.append(f"| {channel} | {fit['within_share']:.0%} | {fit['largest_ratio']:.3g} | {runs} |")
     lines += ["", "## All residuals", "", "| residual | unit | recording | twin before | residual before | z before "
               "| twin after | residual after | z after |", "|---|---|---|---|---|---|---|---|---|"]
     for key in sorted(result.residuals_before, key=lambda k: -np.nan_to_num(result.residuals_before[k].z)):
@@ -138,4 +154,9 @@ def write_result(result: att.LoopResult, folder: Path, label: str) -> dict:
     write_json(folder / "attribution.json", doc)
     figures = _figures(result, folder)
     (folder / "report.md").write_text(markdown(result, label, figures))
+    write_twin_toml(result.twin_after.scenario, folder / "twin.toml",
+                    f"Digital twin of {label} fitted by `gaitsim loop`, with the effects it named:\n"
+                    + "\n".join(f"  {a['effect']} = {a['magnitude']:.4g} {a['magnitude_unit']} ({a['scenario_key']})"
+                                 for a in result.attributions if a["effect"] != "unexplained")
+                    + "\nSimulate it with `gaitsim generate twin.toml --out DIR`.")
     return doc

@@ -23,7 +23,9 @@ from .signature import CHANNELS, Signature, curve_shift_ms, mean_se
 UNITS = {
     "stance_gyro": "deg/s", **{f"stance_rate_{a}": "deg/s" for a in "xyz"}, "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
     "acc_peak": "m/s^2", "gyr_peak": "deg/s", "hf40": "%", "hf80": "%", "onset_hf": "m/s^2", "acc_gyro_lag": "ms",
-    "swing_axis_yaw": "deg", "stance_velocity": "m/s", "rest_acc_norm": "m/s^2",
+    "swing_axis_yaw": "deg", "stance_velocity": "m/s", "rest_acc_norm": "m/s^2", "rest_gyro_change": "deg/s",
+    "rest_acc_change": "m/s^2", "closure_forward": "m/s", "closure_left": "m/s", "closure_up": "m/s",
+    "closure_roll": "deg", "closure_pitch": "deg",
     **{f"profile_{c}": ("m/s^2" if c.startswith("acc") else "deg/s") for c in CHANNELS},
 }
 
@@ -88,4 +90,21 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         rms = float(np.sqrt(np.mean((m.mean - w.mean) ** 2)))
         out[name] = Residual(name, UNITS[name], float(np.sqrt(np.mean(m.mean**2))), float(np.sqrt(np.mean(w.mean**2))),
                              rms, uncertainty(name, float(np.sqrt(np.mean(m.se**2 + w.se**2)))))
+    return out
+
+
+def profile_fit(measured: Signature, twin: Signature, factor: float = settings.PROFILE_SPREAD_FACTOR) -> dict:
+    """Per channel, how far the twin's phase profile is from the recording's, in units of the recording's
+    stride-to-stride standard deviation (not its standard error): the phases (% of the stride from the stance
+    onset) where the twin's mean lies beyond ``factor`` of them, grouped into runs, and the largest ratio."""
+    out = {}
+    for c in CHANNELS:
+        m, w = measured.profiles[c], twin.profiles[c]
+        spread = np.maximum(m.strides.std(0, ddof=1), 1e-9)
+        ratio = np.abs(m.mean - w.mean) / spread
+        phase = 100.0 * np.arange(len(ratio)) / len(ratio)
+        beyond = np.flatnonzero(ratio > factor)
+        runs = np.split(beyond, np.flatnonzero(np.diff(beyond) > 1) + 1) if beyond.size else []
+        out[c] = {"largest_ratio": float(ratio.max()), "within_share": float(np.mean(ratio <= factor)),
+                  "phases_beyond_pct": [[float(phase[r[0]]), float(phase[r[-1]])] for r in runs]}
     return out

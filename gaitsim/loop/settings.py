@@ -18,6 +18,10 @@ REST_STANCE_SHARE = 0.8  # 1, a stance lasting longer than this share of its str
 QUIET_RATE_DPS = 40.0  # deg/s, a stride's phase origin is where |w| last fell below this before mid-stance
 PHASE_POINTS = 64  # points of the normalised gait phase the profiles are resampled on
 
+# -- sensor frame (gaitsim.loop.frame) ----------------------------------------------------------------------
+MIRROR_CLOSURE_RATIO = 3.0  # 1, the data are mirrored when mirroring them back closes the strides this much better
+MIN_FRAME_STRIDES = 3  # strides between detected stances needed to check the frame
+
 # -- signature (gaitsim.loop.signature) ----------------------------------------------------------------------
 HF_EDGES_HZ = (40.0, 80.0)  # Hz, band edges of the hf40 / hf80 shares of |a| variance
 HF_NYQUIST_MARGIN = 1.25  # 1, a band share is computed only when the Nyquist frequency exceeds edge x this
@@ -28,11 +32,13 @@ ONSET_HF_EDGE_HZ = 30.0  # Hz, high-pass edge of |a| for onset_hf
 ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is taken
 BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate
 REST_ACC_NORM_SD_FLOOR = 1e-4  # m/s^2, least sample spread of |f| at rest (a quantised sensor can read one value)
+QUIET_REST_S = 1.0  # s, least length of the first and last rest compared by rest_gyro_change / rest_acc_change
 MIN_TRACK_SAMPLES = 10  # finite position-track samples needed for stance_velocity
 MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives no forward direction (no stance_velocity)
 
 # -- residuals (gaitsim.loop.residuals) ----------------------------------------------------------------------
 NOISE_LEVEL = 3.0  # 1, a residual with |value| <= NOISE_LEVEL x uncertainty is at the noise level
+PROFILE_SPREAD_FACTOR = 2.0  # 1, the twin's profile should lie within this x the recording's stride-to-stride sd
 UNCERTAINTY_FLOOR = {"stance_velocity": 0.0005, "swing_axis_yaw": 0.05}  # m/s, deg: reference / axis resolution
 
 # -- twin fit (gaitsim.loop.twin) ----------------------------------------------------------------------------
@@ -41,6 +47,7 @@ FIT_ITERATIONS = 2  # rounds of cadence and clearance matching by simulation
 PATH_TOLERANCE_M = 0.3  # m, Ramer-Douglas-Peucker tolerance of the twin's path through the stance centres
 HAIRPIN_TURN = math.radians(120.0)  # rad, a sharper corner of the path is walked as a hairpin
 CORNER_RADII_M = (1.0, 0.75, 0.5)  # m, corner radii tried in turn (then half a stride) for the twin's polyline
+RADIUS_MARGIN_M = 0.001  # m, added to the half-stride corner radius (the scenario requires at least one step)
 STRAIGHT_MIN_SPAN_M = 0.5  # m, a straight twin walks toward the track's end only when that end is this far away
 DEFAULT_STRIDE_LENGTH_M = 1.4  # m, the twin's stride length when the track gives no stance-to-stance step
 MAX_CYCLE_SD_FRAC = 0.1  # 1, largest stride-to-stride spread of the cycle time the twin is given
@@ -85,15 +92,15 @@ CLIP_BAND = 0.01  # 1, a clipped sample lies within this share of the recording'
 MIN_CLIPPED_RUNS = 2  # runs of >= 2 consecutive such samples needed before saturation is tried
 
 # -- attribution (gaitsim.loop.attribution) ------------------------------------------------------------------
-NAV_REPEATS = 3  # re-simulations with other seeds that give the spread of the twin's navigation metrics
-TWIN_OF_TWIN_SEED = 100  # seed offset of the twin's own recordings used to measure the fit floor
-TWIN_OF_TWIN_REPEATS = 2  # twin-of-twin pairs behind the fit floor
+NAV_REPEATS = 3  # re-simulations of the twin with other seeds; their pairs calibrate the comparison noise
+TWIN_OF_TWIN_SEED = 100  # seed offset of those re-simulations
 NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_error": 0.05}  # 1, deg/s, m
+HARM_FACTOR = 2.0  # 1, an effect harms a residual at the noise level that it pushes beyond this x NOISE_LEVEL
 EXPLAINED_FRACTION = 0.5  # 1, least share of the acted residual an accepted effect explains
 DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
-MAX_ROUNDS = 20  # residuals acted on per recording at most
-GRID_POINTS = 9  # grid of each effect's magnitude search before the Brent refinement
-BRENT_ITERATIONS = 12  # iterations of the bounded Brent refinement
+MAX_ROUNDS = 6  # residuals acted on per recording at most
+GRID_POINTS = 7  # grid of each effect's magnitude search before the Brent refinement
+BRENT_ITERATIONS = 8  # iterations of the bounded Brent refinement
 BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its bracket
 
 # -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
@@ -101,3 +108,5 @@ BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case
 BLIND_RATE_HZ = 200.0  # Hz, its IMU rate
 BLIND_REFERENCE_RATE_HZ = 100.0  # Hz, its position reference (like a motion tracker)
 BLIND_SEED = 11  # seed of the blind recordings
+BLIND_ROUNDS = 4  # loop rounds on each blind recording
+BLIND_MAGNITUDE_TOLERANCE = 0.25  # 1, a blind effect is found when its magnitude is within this share of the truth

@@ -30,10 +30,17 @@ simulated, so two signatures can be compared number by number:
                                          momentum direction of the gyro, sign so that y > 0)
    stance_velocity             m/s       forward velocity of the position track (reference or truth) over
                                          the middle third of the stance; forward = this stride's direction
+
+   closure_forward, _left, _up  m/s       stride closure (:mod:`gaitsim.loop.closure`): velocity the unaided
+                                         strapdown carries from this stride's stance to the next one
+   closure_roll, _pitch        deg       stride closure: gyro-carried minus accelerometer-read tilt there
    ==========================  ========  ===============================================================
 
    plus ``rest_acc_norm`` (m/s^2, |mean specific force| over the first detected rest, uncertainty its sample
-   standard deviation / sqrt(samples)) and the phase profiles: each stride's six channels resampled onto
+   standard deviation / sqrt(samples)), ``rest_gyro_change`` (deg/s) and ``rest_acc_change`` (m/s^2): the
+   length of the change of the mean angular rate and specific force from the first to the last detected rest
+   (at least ``settings.QUIET_REST_S`` each; absent without two such rests), a drift no constant sensor error
+   makes, uncertainty from the samples' spread, and the phase profiles: each stride's six channels resampled onto
    ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean and standard
    error. Capitalised names are :mod:`gaitsim.loop.settings`.
 
@@ -52,9 +59,11 @@ from nav.constants import DEFAULT_GRAVITY
 from nav.series import resample
 
 from . import settings
+from .closure import following, stride_closure
 from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+CLOSURE = ("closure_forward", "closure_left", "closure_up", "closure_roll", "closure_pitch")
 PER_STRIDE = ("stance_gyro", "stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_acc_spread", "stance_duration",
               "stance_shoe", "acc_peak", "gyr_peak", "hf40", "hf80", "onset_hf", "swing_axis_yaw")  # scalars per stride
 
@@ -233,7 +242,12 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     if pos is not None and pos_t is not None:
         scalars["stance_velocity"] = mean_se(_stance_velocity(t, np.asarray(pos_t, float), np.asarray(pos, float),
                                                                strides, stances))
-    scalars["rest_acc_norm"] = _rest_acc_norm(acc[stances_all[0][0]:stances_all[0][1]])
+    rest = slice(*stances_all[0])
+    scalars["rest_acc_norm"] = _rest_acc_norm(acc[rest])
+    scalars.update(_rest_changes(t, acc, gyr, stances_all))
+    closing = stride_closure(t, acc, gyr, stances, following(stances, stances_all), gravity, gyr[rest].mean(0))
+    for name, column in zip(CLOSURE, np.column_stack([closing.velocity, closing.tilt]).T):
+        scalars[name] = mean_se(column)
     curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
     return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
                      _spectrum(acc_norm, strides, rate), curves, result.stationary, float(gravity))
@@ -275,6 +289,22 @@ def _rest_acc_norm(rest_acc: np.ndarray) -> Scalar:
     norm_samples = np.linalg.norm(rest_acc, axis=1)
     spread = max(norm_samples.std(ddof=1), settings.REST_ACC_NORM_SD_FLOOR)
     return Scalar(float(np.linalg.norm(rest_acc.mean(0))), float(spread / math.sqrt(len(rest_acc))), norm_samples)
+
+
+def _rest_changes(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> dict:
+    """``rest_gyro_change`` (deg/s) and ``rest_acc_change`` (m/s^2) between the first and the last rest of at
+    least ``settings.QUIET_REST_S`` (module docstring); empty without two such rests."""
+    long = [(a, b) for a, b in stances if t[b - 1] - t[a] >= settings.QUIET_REST_S]
+    if len(long) < 2:
+        return {}
+    first, last = slice(*long[0]), slice(*long[-1])
+    out = {}
+    for name, x, scale in (("rest_gyro_change", gyr, math.degrees(1.0)), ("rest_acc_change", acc, 1.0)):
+        change = scale * (x[last].mean(0) - x[first].mean(0))
+        spread = scale * np.hypot(x[first].std(0, ddof=1) / math.sqrt(long[0][1] - long[0][0]),
+                                  x[last].std(0, ddof=1) / math.sqrt(long[-1][1] - long[-1][0]))
+        out[name] = Scalar(float(np.linalg.norm(change)), float(np.linalg.norm(spread)), change)
+    return out
 
 
 def _profiles(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, strides: np.ndarray) -> dict:

@@ -150,11 +150,12 @@ def gait_statistics(rec: Recording, sig: Signature, pos_t=None, pos=None) -> dic
 # ------------------------------------------------------------------------------------------------ path
 def path_table(points: np.ndarray, stride_length: float) -> tuple[dict, str]:
     """A [path] table through the stance centres ``points`` (K, 2) m, and how it was built: a polyline with the
-    first corner radius that fits its legs (and is at least one step), else a straight walk."""
+    first corner radius that fits its legs (and is at least one step, the last tried one step and
+    ``settings.RADIUS_MARGIN_M``, so that round-off in the built path keeps it valid), else a straight walk."""
     simple = paths.simplify(points, settings.PATH_TOLERANCE_M)
     length = float(np.sum(np.hypot(*np.diff(points, axis=0).T)))
     if len(simple) > 2:
-        for radius in (*settings.CORNER_RADII_M, stride_length / 2):
+        for radius in (*settings.CORNER_RADII_M, stride_length / 2 + settings.RADIUS_MARGIN_M):
             waypoints = paths.hairpins(simple, radius, settings.HAIRPIN_TURN)
             if (radius >= stride_length / 2 and paths.corners_fit(waypoints, radius)
                     and paths.polyline(waypoints, radius).length >= stride_length):
