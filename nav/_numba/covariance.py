@@ -26,7 +26,7 @@ from numba import njit
 from .linalg import spd_inverse
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _transition_column(X, n, j, h, a, C, f, inverse):
     """Column j of X <- Phi X[:, j] (or Phi^-1 X[:, j]); only its rows 0:9 change."""
     p0, p1, p2 = X[0, j], X[1, j], X[2, j]
@@ -62,7 +62,7 @@ def _transition_column(X, n, j, h, a, C, f, inverse):
     X[6, j], X[7, j], X[8, j] = t0, t1, t2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def transition_rows(X, n, ncols, h, a, C, f, inverse):
     """X <- Phi X (or Phi^-1 X when ``inverse``) for the first ``ncols`` columns of X (n rows).
 
@@ -73,7 +73,7 @@ def transition_rows(X, n, ncols, h, a, C, f, inverse):
         _transition_column(X, n, j, h, a, C, f, inverse)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def transition_transposed(lam, n, h, a, C, f):
     """lam <- Phi^T lam (n,), in place (the adjoint of :func:`transition_rows`)."""
     v0, v1, v2 = lam[3], lam[4], lam[5]
@@ -95,7 +95,7 @@ def transition_transposed(lam, n, h, a, C, f):
                     lam[15 + 3 * c + e] -= ct * f[e]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def propagate(P, n, h, a, C, f, noise_power):
     """P <- Phi P Phi^T + Q in place over one interval of h seconds; Q = diag(noise_power) h.
 
@@ -123,7 +123,7 @@ def update_buffers(n):
     return np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)), np.empty((3, 3))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, w):
     """Kalman update of P (n x n) in place with z = H dx + noise (variances r_var, m <= 3 values), Joseph form.
 

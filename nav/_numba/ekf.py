@@ -57,7 +57,7 @@ def initial_covariance_and_noise(n, cfg):
     return P, power
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
     """Write the nominal state into row k of the outputs."""
     for i in range(4):
@@ -71,7 +71,7 @@ def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
         gsens[k, i] = G[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _inject(dx, n, q, v, p, ba, bg, G):
     """Closed loop: add the error-state estimate dx to the nominal state."""
     for i in range(3):
@@ -98,7 +98,7 @@ def smoother_buffers(records, n, steps):
             np.zeros((records, 3)), np.empty((steps, 3)))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _update(k, P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, work, q, v, p, ba, bg, G, rts, records, count):
     """One Joseph-form update injected into the nominal state, recorded for the smoother when ``rts``.
 
@@ -144,7 +144,7 @@ def filter_run(mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
                    pos, bias_acc, bias_gyr, gsens, p_diag)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p0, cfg, rts,
             quat, vel, pos, bias_acc, bias_gyr, gsens, p_diag):
     """:func:`filter_run` for n states."""
@@ -260,7 +260,7 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
     return skipped
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _adjoint_updates(k, count, records, n, lam, w):
     """Undo the updates at sample k in the adjoint ``lam`` (last first) and add their corrections to ``w``;
     returns the number of records left."""
@@ -282,7 +282,7 @@ def _adjoint_updates(k, count, records, n, lam, w):
     return count
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _smooth(t, i0, n, power, records, count, quat, vel, pos, bias_acc, bias_gyr, gsens):
     """Backward pass (see the module docstring): smooths the nominal outputs from the last sample to i0."""
     n_samples = t.shape[0]

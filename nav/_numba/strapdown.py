@@ -13,7 +13,7 @@ MODE_POINT_SAMPLES = 0  # acc/gyr are point samples; RK4 with interpolated mid-s
 MODE_INCREMENTS = 1  # acc/gyr hold exact increments dv (m/s, body at t_k) and dtheta (rad) over [t_k, t_k+1]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def rk4_increment(h, w0, wm, w1, f0, fm, f1, dq, du, ds):
     """Body-frame increments over one interval by RK4 on the relative motion from t_k.
 
@@ -56,7 +56,7 @@ def rk4_increment(h, w0, wm, w1, f0, fm, f1, dq, du, ds):
     ds[2] = h6 * (2.0 * u2[2] + 2.0 * u3[2] + u4[2])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def apply_increment(q, v, p, dq, du, ds, h, gravity):
     """Advance the nominal state (q, v, p) in place by body increments over an interval of h seconds.
 
@@ -74,7 +74,7 @@ def apply_increment(q, v, p, dq, du, ds, h, gravity):
     q[0], q[1], q[2], q[3] = qnormalised(n0, n1, n2, n3)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def mid_sample_weights(t, k, weights):
     """Cubic Lagrange weights (4,) of the value at the middle of [t_k, t_k+1]; returns the first sample index.
 
@@ -110,7 +110,7 @@ def mid_samples_into(t, x, out):
                          + weights[2] * x[min(first + 2, n - 1), c] + weights[3] * x[min(first + 3, n - 1), c])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, wk):
     """Bias-corrected body increments over [t_k, t_k+1]; returns h = t_k+1 - t_k (s).
 
