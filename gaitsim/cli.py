@@ -1,4 +1,5 @@
-"""Command line: ``gaitsim generate | nav | run | reproduce | loop | stance``. A thin layer over the Python API."""
+"""Command line: ``gaitsim generate | nav | run | reproduce | loop | stance | import | fixtures | score``. A thin layer
+over the Python API."""
 
 from __future__ import annotations
 
@@ -7,17 +8,20 @@ import os
 import sys
 
 from nav import command as nav_command
+from nav import storage
 
 from .experiments import command as experiments_command
 from .experiments.runner import RunsFailedError
+from .fixtures import command as fixtures_command
 from .loop import command as loop_command
+from .measured import import_command
 from .ranges import check_value
 from .scenario import load_scenario
 from .simulate import generate, summary
 from .stance import command as stance_command
 
 # subcommands living in their own modules; each exposes add_parser(subparsers)
-SUBCOMMANDS = (nav_command, experiments_command, loop_command, stance_command)
+SUBCOMMANDS = (nav_command, experiments_command, loop_command, stance_command, import_command, fixtures_command)
 
 
 def _generate(args) -> int:
@@ -26,7 +30,8 @@ def _generate(args) -> int:
         check_value("scenario", "seed", args.seed, "gaitsim generate --seed")
     if args.runs is not None:
         check_value("scenario", "runs", args.runs, "gaitsim generate --runs")
-    recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force)
+    recs = generate(scenario, args.out, seed=args.seed, runs=args.runs, overwrite=args.force, form=args.format,
+                    parquet=args.parquet, progress=not args.no_progress)
     print(summary(recs[0]))
     if len(recs) > 1:
         print(f"  ... {len(recs)} runs written to {args.out}/run-000 .. run-{len(recs) - 1:03d}")
@@ -44,6 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--seed", type=int, default=None, help="base seed (default: the scenario's)")
     gen.add_argument("--runs", type=int, default=None, help="number of runs (default: the scenario's)")
     gen.add_argument("--force", action="store_true", help="replace an existing output folder")
+    storage.add_arguments(gen)
+    gen.add_argument("--no-progress", action="store_true", help="no progress bar over the runs")
     gen.set_defaults(func=_generate)
     for module in SUBCOMMANDS:
         module.add_parser(sub)
@@ -65,7 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     except RunsFailedError as exc:
         print(f"gaitsim {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_RUNS_FAILED
-    except (ValueError, OSError) as exc:  # ScenarioError and RecordingError are ValueErrors
+    except (ValueError, OSError, ImportError) as exc:  # ScenarioError and RecordingError are ValueErrors; a
+        # missing optional dependency (pyarrow, pandas) names its extra
         print(f"gaitsim {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
     except MemoryError:

@@ -12,9 +12,12 @@ what no foot does, not what is unusual.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+
+import numpy as np
 
 from .errors import ScenarioError
 
@@ -46,10 +49,10 @@ class Range:
         below = value < self.high if self.open_high else value <= self.high
         return above and below
 
-    def describe(self) -> str:
-        """The interval in the usual notation with the unit, e.g. ``(0, 0.5] s``."""
+    def describe(self, unit: bool = True) -> str:
+        """The interval in the usual notation, with the unit unless ``unit`` is False, e.g. ``(0, 0.5] s``."""
         return (f"{'(' if self.open_low else '['}{self.low:g}, {self.high:g}{')' if self.open_high else ']'}"
-                + (f" {self.unit}" if self.unit else ""))
+                + (f" {self.unit}" if self.unit and unit else ""))
 
 
 GAIT_LITERATURE = "gait literature (Perry & Burnfield, Gait Analysis) and anchors §7"
@@ -80,7 +83,8 @@ RANGES: dict[str, dict[str, Range]] = {
         "foot_flat_frac": Range(0.01, 0.7, "", GAIT_LITERATURE),
         "push_off_frac": Range(0.01, 0.6, "", GAIT_LITERATURE),
         "swing_frac": Range(0.2, 0.8, "", GAIT_LITERATURE + ": swing 38-40 % walking, ~70 % running (stance ~0.3)"),
-        "pitch_heel_strike_deg": Range(-75, 0, "deg", GAIT_LITERATURE + ": -15..-30 deg toes up", open_high=True),
+        "pitch_heel_strike_deg": Range(-75, 45, "deg", GAIT_LITERATURE + ": -15..-30 deg toes up (heel strike); "
+                                       "a few deg toes down (forefoot strike: Lieberman et al., Nature 2010)"),
         "pitch_rate_heel_strike_dps": Range(-2500, 2500, "deg/s", PEAKS),
         "pitch_accel_heel_strike_dps2": Range(-200_000, 200_000, "deg/s^2", "gaitmap: -8000 deg/s^2 after toe off, x25"),
         "pitch_toe_off_deg": Range(0, 90, "deg", GAIT_LITERATURE + ": 35-60 deg heel up", open_low=True),
@@ -95,6 +99,8 @@ RANGES: dict[str, dict[str, Range]] = {
         "pitch_sd_deg": Range(0, 15, "deg", GAIT_LITERATURE),
         "stand_start_s": Range(0.5, 3_600, "s", "the filter aligns on >= 0.5 s of rest; one hour at most"),
         "stand_end_s": Range(0.5, 3_600, "s", "the filter aligns on >= 0.5 s of rest; one hour at most"),
+        "stop_every_strides": Range(0, 10_000, "strides", "0 = no stops; " + NUMERIC),
+        "stop_duration_s": Range(0, 3_600, "s", "a stop at a crossing or a door: seconds to minutes; one hour at most"),
     },
     "impact": {
         "heel_strike_velocity_mps": Range(-5, 5, "m/s", GAIT_LITERATURE + ": heel speed at contact < 1 m/s walking"),
@@ -197,21 +203,74 @@ def check_ranges(section: str, table: dict, where: str, keys: Iterable[str] | No
             check_value(section, key, table[key], where)
 
 
+def _shown(value) -> str:
+    """A default as written in a scenario file (``required`` for a key without one)."""
+    if value is None:
+        return "required"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_shown(v) for v in value) + "]"
+    if isinstance(value, bool):
+        return str(value).lower()
+    return f"{value:g}" if isinstance(value, (int, float)) else f'"{value}"'
+
+
+def key_defaults() -> dict[str, dict[str, object]]:
+    """section -> scenario key -> default in the key's unit (None: required), read from the objects that hold the
+    defaults (the world's dataclasses, the path builder's, sampling's and the experiment settings'). Imported
+    here, not at the top: those modules check their keys with this one."""
+    from nav.constants import DEFAULT_GRAVITY
+
+    from .experiments.setup import ExperimentSettings, NavSettings
+    from .scenario import DEFAULT_CORNER_RADIUS_M, DEFAULT_RATE_HZ, WORLD_SECTIONS, Scenario, section_table
+
+    defaults = {"scenario": {f.name: f.default for f in dataclasses.fields(Scenario) if f.name in ("seed", "runs")},
+                "path": {"length_m": None, "yaw_deg": 0.0, "start_m": [0.0, 0.0], "radius_m": None,
+                         "turn_deg": None, "waypoints_m": None, "corner_radius_m": DEFAULT_CORNER_RADIUS_M,
+                         "duration_s": None},
+                "sampling": {"rate_hz": DEFAULT_RATE_HZ, "gravity_mps2": DEFAULT_GRAVITY},
+                "nav": dataclasses.asdict(NavSettings()), "experiment": dataclasses.asdict(ExperimentSettings())}
+    defaults.update({section: section_table(cls()) for section, cls in WORLD_SECTIONS.items()})
+    return defaults
+
+
+def _sensor_markdown() -> list[str]:
+    """The [sensor] keys: SI unit, default (the ideal sensor's) and accepted units (:mod:`gaitsim.imu.config`)."""
+    from .imu.model import PARAMETERS
+    from .imu.units import accepted_units, si_unit
+
+    lines = ["## [sensor]", "",
+             "Each term is written `[value, \"unit\"]` in any accepted unit and converted to SI once; `preset` "
+             "(ideal, vn200, paper-vn200, bmi160, adis16497; default ideal) sets every term, the keys override "
+             "single terms. The sensor's timing is checked against the sample rate (`gaitsim/scenario.py`); "
+             "noise densities, repeatabilities, instabilities, random walks, resolutions and jitter must be >= 0, "
+             "time constants, ranges and bandwidths > 0.", "",
+             "| key | SI unit | default (ideal) | accepted units |", "|---|---|---|---|"]
+    for key, (kind, _shape, default) in PARAMETERS.items():
+        default = np.asarray(default).tolist()
+        lines.append(f"| `{key}` | {si_unit(kind) or '1'} | {_shown(default)} | {', '.join(accepted_units(kind))} |")
+    return lines + [""]
+
+
 def ranges_markdown() -> str:
-    """The range table of the docs (``docs/scenario-ranges.md``), generated from :data:`RANGES`."""
-    lines = ["# Scenario key ranges",
+    """The reference of every scenario key (``docs/scenario-ranges.md``): unit, default and allowed range, generated
+    from :data:`RANGES`, :func:`key_defaults` and the sensor's parameter table."""
+    defaults = key_defaults()
+    lines = ["# Scenario keys: units, defaults, allowed ranges",
              "",
              "Generated from `gaitsim/ranges.py` (`python3 -m gaitsim.ranges > docs/scenario-ranges.md`); a test "
-             "keeps this file equal to the code. Every number must be finite and inside its range; vector keys "
-             "apply the range to each component. Cross-key rules (phases add up to the cycle, the swing fits, "
-             "ringing below Nyquist, sensor timing against the sample period, the sample count) are listed in "
-             "`gaitsim/scenario.py`.",
+             "keeps this file equal to the code. Units are in the key names and in the tables; every number must "
+             "be finite and inside its range; vector keys apply the range to each component. Cross-key rules "
+             "(phases add up to the cycle, the swing fits, ringing below Nyquist, sensor timing against the "
+             "sample period, the sample count) are listed in `gaitsim/scenario.py`. `[path]` keys apply by kind "
+             "(straight: length_m, yaw_deg, start_m; arc: radius_m, turn_deg, yaw_deg, start_m; polyline: "
+             "waypoints_m, corner_radius_m, closed; static: duration_s).",
              ""]
     for section, table in RANGES.items():
-        lines += [f"## [{section}]", "", "| key | allowed | source |", "|---|---|---|"]
-        lines += [f"| `{key}` | {bounds.describe()} | {bounds.source} |" for key, bounds in table.items()]
+        lines += [f"## [{section}]", "", "| key | unit | default | allowed | source |", "|---|---|---|---|---|"]
+        lines += [f"| `{key}` | {bounds.unit or '1'} | {_shown(defaults[section].get(key))} | "
+                  f"{bounds.describe(unit=False)} | {bounds.source} |" for key, bounds in table.items()]
         lines.append("")
-    return "\n".join(lines)
+    return "\n".join(lines + _sensor_markdown())
 
 
 if __name__ == "__main__":

@@ -12,7 +12,12 @@ Sections and keys (every key optional unless marked; units in the key names):
                 arc:      radius_m (>= one step), turn_deg (signed, left positive), yaw_deg, start_m
                 polyline: waypoints_m [[x, y], ...] (>= 2), corner_radius_m (>= one step), closed (bool)
                 static:   duration_s (>0)
-``[gait]``      fields of :class:`gaitsim.world.gait.GaitParams`, angles in deg (``_deg``, ``_dps``, ``_dps2``)
+``[gait]``      kind = "custom" | "walk" | "run-rearfoot" | "run-forefoot" (default "custom"): the gait whose
+                speed-dependent defaults (:mod:`gaitsim.world.gaits`, at the file's cadence) fill [gait],
+                [impact] and [micromotion] under the keys the file writes; then the fields of
+                :class:`gaitsim.world.gait.GaitParams`, angles in deg (``_deg``, ``_dps``, ``_dps2``). The
+                resolved values are what a scenario holds: :func:`scenario_document` writes them all and no kind,
+                and :func:`with_changes` changes them one by one (a changed cadence does not move the others).
 ``[impact]``    fields of :class:`gaitsim.world.gait.ImpactParams`, likewise
 ``[micromotion]`` fields of :class:`gaitsim.world.gait.MicroMotionParams`, likewise
 ``[mount]``     fields of :class:`gaitsim.world.foot.Mount`, likewise
@@ -51,6 +56,7 @@ from .imu.model import SensorSpec
 from .world import path as paths
 from .world.foot import MOUNTS, Mount
 from .world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+from .world.gaits import kind_tables
 
 DEG = math.pi / 180.0  # rad per deg (deg/s and deg/s^2 convert alike)
 # scenario key (unit in its name) -> field of the world's dataclass that holds the quantity in SI (rad, rad/s, rad/s^2)
@@ -73,6 +79,8 @@ WRITTEN_DIGITS = 15  # significant digits of a converted value written back (the
 MAX_SWING_SPEED = 10.0  # m/s, mean foot speed over the swing (stride / swing time); sprinting feet reach ~2x this at peak
 MAX_STRIDE_SD_SHARE = 0.25  # stride-to-stride spread of the stride length, share of the stride (4 sd stay > 0)
 RADIUS_ROUNDING = 1e-9  # relative: a radius of exactly one step survives the rounding of a path's geometry
+DEFAULT_RATE_HZ = 800.0  # [sampling] rate_hz when not given
+DEFAULT_CORNER_RADIUS_M = 1.0  # [path] corner_radius_m of a polyline when not given
 MAX_SAMPLES = 5_000_000  # samples of one run (~1.7 h at 800 Hz; ~0.7 kB of memory per sample while simulating)
 MAX_JITTER_SHARE = 0.1  # timestamp jitter std, share of the sample period (10 sd apart: timestamps never reorder)
 MAX_SKEW_S = 0.05  # s, accelerometer-gyro skew (the skewed channel loses this much data at each end)
@@ -97,7 +105,7 @@ class Scenario:
     name: str
     walk: Walk
     mount: Mount = field(default_factory=Mount)
-    rate_hz: float = 800.0
+    rate_hz: float = DEFAULT_RATE_HZ
     gravity: float = DEFAULT_GRAVITY
     seed: int = 0
     runs: int = 1
@@ -223,6 +231,11 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
     if abs(total - 1) > 1e-9:
         raise _blamed(f"{where} [gait]", {k: gait[k] for k in fracs}, written,
                       f"the phase fractions must add up to 1 (they add up to {total:.6g})")
+    strike = "forefoot strike" if g.forefoot_strike else "heel strike"
+    if (g.pitch_heel_strike > 0) != g.forefoot_strike or g.pitch_heel_strike == 0:
+        raise _blamed(f"{where} [gait]", {"pitch_heel_strike_deg": gait["pitch_heel_strike_deg"],
+                                          "forefoot_strike": g.forefoot_strike}, written,
+                      f"a {strike} lands {'toes down (pitch > 0)' if g.forefoot_strike else 'toes up (pitch < 0)'}")
     swing_s = g.swing_frac * g.cycle_s
     swing_speed = g.stride_length_m / swing_s
     if swing_speed > MAX_SWING_SPEED:
@@ -252,13 +265,15 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
                                                  "heel_rocker_frac": gait["heel_rocker_frac"],
                                                  "push_off_frac": gait["push_off_frac"]}, written,
                       f"the creep ramp must be shorter than the heel rocker and push-off ({min(rocker, push):.3f} s)")
-    transfer_limit = min(-g.pitch_heel_strike, g.pitch_toe_off)
+    transfer_limit = 2.0 * min(abs(g.pitch_heel_strike), g.pitch_toe_off)
     if not mm.contact_transfer_pitch <= transfer_limit:
         raise _blamed(f"{where} [micromotion]", {"contact_transfer_pitch_deg": micro["contact_transfer_pitch_deg"],
                                                  "pitch_heel_strike_deg": gait["pitch_heel_strike_deg"],
                                                  "pitch_toe_off_deg": gait["pitch_toe_off_deg"]}, written,
-                      f"the contact rolls from heel to toe within the stance's pitch: at most "
-                      f"{math.degrees(transfer_limit):.3g} deg (the heel-strike and toe-off pitch)")
+                      f"the foot must strike on its heel (or, striking with the forefoot, on its toes) and leave the "
+                      f"ground from its toes, outside the pitch range +-half the transfer pitch over which the "
+                      f"contact rolls along the sole: at most {math.degrees(transfer_limit):.3g} deg (twice the "
+                      f"smaller of the strike and toe-off pitch)")
     _require(mm.foot in ("left", "right"), f"{where} [micromotion]", "foot", mm.foot, "allowed: left, right")
     flat = g.foot_flat_frac * g.cycle_s
     if not mm.loading_duration_s < flat:
@@ -309,7 +324,7 @@ def build_path(table: dict, gait: GaitParams, where: str):
         isinstance(p, list) and len(p) == 2 and all(_is_number(x) for x in p) for p in pts)
     _require(ok, where, "waypoints_m", pts, "must be a list of at least two [x, y] points (m)")
     check_value("path", "waypoints_m", pts, where)
-    radius = num("corner_radius_m", 1.0)
+    radius = num("corner_radius_m", DEFAULT_CORNER_RADIUS_M)
     _require(radius >= step, where, "corner_radius_m", radius, f"a turn radius must be at least one step ({step} m)")
     w = np.array(pts, float)
     if _check_type(where, "closed", table.get("closed", False), False):
@@ -340,12 +355,13 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     runs = _checked(f"{source} [scenario]", "scenario", "runs", head.get("runs", 1), 0)
     written = frozenset(key for section in doc.values() for key in section)
 
-    gait = fill(GaitParams, doc.get("gait", {}), f"{source} [gait]")
-    impact = fill(ImpactParams, doc.get("impact", {}), f"{source} [impact]")
-    micro = fill(MicroMotionParams, doc.get("micromotion", {}), f"{source} [micromotion]")
+    tables = _world_tables(doc, source)
+    gait = fill(GaitParams, tables["gait"], f"{source} [gait]")
+    impact = fill(ImpactParams, tables["impact"], f"{source} [impact]")
+    micro = fill(MicroMotionParams, tables["micromotion"], f"{source} [micromotion]")
     validate_gait(gait, impact, micro, source, written)
     mount = _mount(doc.get("mount", {}), Mount(), source)
-    rate, gravity = _sampling(doc.get("sampling", {}), 800.0, DEFAULT_GRAVITY, source)
+    rate, gravity = _sampling(doc.get("sampling", {}), DEFAULT_RATE_HZ, DEFAULT_GRAVITY, source)
 
     if "path" not in doc:
         raise ScenarioError(f"{source}: missing section [path] (kind = straight | arc | polyline | static)")
@@ -361,14 +377,31 @@ def scenario_from_dict(doc: dict, source: str = "<scenario>") -> Scenario:
     )
 
 
+def _world_tables(doc: dict, source: str) -> dict[str, dict]:
+    """The [gait], [impact] and [micromotion] tables of ``doc``, on top of the defaults of its gait kind."""
+    gait = dict(doc.get("gait", {}))
+    kind = _check_type(f"{source} [gait]", "kind", gait.pop("kind", "custom"), "")
+    cadence = gait.get("cadence_steps_per_min")
+    if cadence is not None:
+        cadence = _checked(f"{source} [gait]", "gait", "cadence_steps_per_min", cadence, 0.0)
+    try:
+        defaults = kind_tables(kind, cadence)
+    except ValueError as exc:
+        raise ScenarioError(f"{source} [gait]: {exc}") from None
+    return {"gait": {**defaults["gait"], **gait},
+            **{s: {**defaults[s], **doc.get(s, {})} for s in ("impact", "micromotion")}}
+
+
 def expected_samples(walk: Walk, rate_hz: float) -> int:
     """Samples of one run of ``walk`` at ``rate_hz``, estimated from the path and the gait before anything is
-    allocated (an upper bound: every cycle 4 sd long, one extra stride)."""
+    allocated (an upper bound: every cycle 4 sd long, one extra stride, one extra stop)."""
     g = walk.gait
     if walk.path is None:
         return int(math.ceil(walk.duration_s * rate_hz)) + 1
     strides = max(1, round(walk.path.length / g.stride_length_m)) + 1
-    duration = g.stand_start_s + g.stand_end_s + strides * g.cycle_s * (1 + 4 * g.cycle_sd_frac)
+    stops = strides // g.stop_every_strides if g.stop_every_strides > 0 else 0
+    duration = (g.stand_start_s + g.stand_end_s + strides * g.cycle_s * (1 + 4 * g.cycle_sd_frac)
+                + stops * g.stop_duration_s)
     return int(math.ceil(duration * rate_hz)) + 1
 
 
@@ -479,14 +512,18 @@ def scenario_document(scenario: Scenario) -> dict:
     return doc
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file."""
-    path = Path(path)
+def read_toml(path: str | Path, what: str = "scenario") -> dict:
+    """The document of a TOML file; ScenarioError naming the file (a ``what`` file) when it is missing or not
+    valid TOML."""
     try:
         with open(path, "rb") as fh:
-            doc = tomllib.load(fh)
+            return tomllib.load(fh)
     except FileNotFoundError:
-        raise ScenarioError(f"{path}: scenario file not found") from None
+        raise ScenarioError(f"{path}: {what} file not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
-    return scenario_from_dict(doc, str(path))
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file."""
+    return scenario_from_dict(read_toml(path), str(path))

@@ -15,7 +15,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
+from nav import storage
 from nav.constants import STANDARD_GRAVITY
 from nav.files import atomic_output_dir
 from nav.recording import Events, Recording, Truth, write_recording_into
@@ -93,21 +95,27 @@ def simulate_walk(scenario: Scenario, seed: int | None = None, run: int = 0) -> 
 
 
 def generate(scenario: Scenario, out: str | Path, seed: int | None = None, runs: int | None = None,
-             overwrite: bool = False) -> list[Recording]:
+             overwrite: bool = False, form: str = storage.DEFAULT_FORM, parquet: bool = False,
+             progress: bool = False) -> list[Recording]:
     """Simulate ``runs`` runs of ``scenario`` and write them to ``out`` (nothing is left there on failure).
 
     With one run the recording is ``out`` itself; with several, ``out/run-000``, ``out/run-001``, ...
+    ``form`` and ``parquet`` choose how the tables are stored (:func:`nav.recording.write_recording`);
+    ``progress`` shows a progress bar over the runs.
     """
     runs = scenario.runs if runs is None else runs
     if runs < 1:
         raise ValueError(f"runs = {runs}: must be >= 1")
+    storage.check_form(form)
+    if parquet:
+        storage.require_pyarrow()
     recordings = []
     with atomic_output_dir(out, overwrite) as tmp:
-        for r in range(runs):
+        for r in tqdm(range(runs), desc=f"generate {scenario.name}", unit="run", disable=not progress or runs == 1):
             rec = simulate_walk(scenario, seed=seed, run=r)
             folder = tmp if runs == 1 else tmp / f"run-{r:03d}"
             folder.mkdir(exist_ok=True)
-            write_recording_into(rec, folder)
+            write_recording_into(rec, folder, form=form, parquet=parquet)
             recordings.append(rec)
     return recordings
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from tqdm import tqdm
+
 from . import metrics
 from .adaptive_detector import AdaptiveThreshold
 from .calibration import TERM_GROUPS
@@ -64,6 +66,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--stance-velocity", default=None,
                    help="stance velocity model JSON (step 2; default zero velocity)")
     p.add_argument("--rts", action="store_true", help="RTS-smooth the solution")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars over a folder of runs")
     p.add_argument("--time-unit", choices=TIME_UNITS, default="s",
                    help="unit of the recording's time columns (default s; the input check refuses a sample rate "
                         "outside 20 Hz..5 kHz and says when the time looks like ms or us)")
@@ -99,9 +102,12 @@ def run(args) -> int:
     """Execute ``gaitsim nav``; returns the exit code."""
     options = options_from_args(args)
     folders = list_runs(args.recording)
-    recs = [read_recording(f, time_unit=args.time_unit) for f in folders]
-    solutions = navigate(recs, options)
-    scores = [score_solution(r, s) for r, s in zip(recs, solutions)]
+    quiet = args.no_progress or len(folders) == 1
+    recs = [read_recording(f, time_unit=args.time_unit)
+            for f in tqdm(folders, desc="read runs", unit="run", disable=quiet)]
+    solutions = navigate(recs, options)  # one compiled batch call when the runs share their length
+    scores = [score_solution(r, s) for r, s in tqdm(zip(recs, solutions), total=len(recs), desc="score runs",
+                                                     unit="run", disable=quiet)]
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
         if len(recs) == 1:
             write_solution_into(tmp, solutions[0], scores[0])

@@ -29,9 +29,8 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from ._numba import ekf as kernels
-from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES
 from .constants import DEFAULT_GRAVITY
-from .strapdown import mechanisation_inputs, mid_samples
+from .strapdown import mechanisation_mode
 
 STATE_SIZES = (9, 15, 24)
 OPENSHOE_RATE_HZ = 820.0  # the sample rate at which OpenShoe's per-sample noise values are converted
@@ -141,20 +140,38 @@ class FilterOutput:
                             self.gsens[r], self.p_diag[r], self.skipped_updates[r])
 
 
-def _outputs(shape: tuple[int, ...], states: int) -> FilterOutput:
-    def nans(*tail):
-        return np.full(shape + tail, np.nan)
+def empty_outputs(shape: tuple[int, ...], states: int) -> FilterOutput:
+    """Uninitialised estimate arrays for ``shape`` (runs, samples) or (samples,); the filter fills every row."""
+    def rows(*tail):
+        return np.empty(shape + tail)
 
-    return FilterOutput(nans(4), nans(3), nans(3), nans(3), nans(3), nans(9), nans(states), 0)
+    return FilterOutput(rows(4), rows(3), rows(3), rows(3), rows(3), rows(9), rows(states), 0)
 
 
-def _per_sample_stance_velocity(stance_velocity, shape: tuple[int, ...]) -> np.ndarray:
+def per_sample_stance_velocity(stance_velocity, shape: tuple[int, ...]) -> np.ndarray:
+    """(shape..., 3) m/s: the ZUPT's stance velocity per sample from None (zero), a (3,) constant or an array."""
     if stance_velocity is None:
         return np.zeros(shape + (3,))
     v = np.ascontiguousarray(np.broadcast_to(np.asarray(stance_velocity, float), shape + (3,)))
     if not np.all(np.isfinite(v)):
         raise ValueError("stance_velocity (the ZUPT's velocity) contains NaN or inf values")
     return v
+
+
+def check_filter_inputs(t, acc, gyr, stationary, start: int):
+    """(t, acc, gyr, stationary) as contiguous float64 / bool arrays of shapes (N,), (N, 3), (N, 3), (N,), and
+    ``start`` checked to lie in 0..N-1; a ValueError naming the mismatch otherwise."""
+    t = np.ascontiguousarray(t, float)
+    acc = np.ascontiguousarray(acc, float)
+    gyr = np.ascontiguousarray(gyr, float)
+    n = len(t)
+    stationary = np.ascontiguousarray(stationary, bool)
+    if stationary.shape != (n,) or acc.shape != (n, 3) or gyr.shape != (n, 3):
+        raise ValueError(f"run_filter: shapes t {t.shape}, acc {acc.shape}, gyr {gyr.shape}, stationary "
+                         f"{stationary.shape} do not match (N,), (N,3), (N,3), (N,)")
+    if not 0 <= start < n:
+        raise ValueError(f"run_filter: start sample {start} outside 0..{n - 1}")
+    return t, acc, gyr, stationary
 
 
 def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
@@ -180,25 +197,16 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
     -------
     FilterOutput.
     """
-    t = np.ascontiguousarray(t, float)
-    acc = np.ascontiguousarray(acc, float)
-    gyr = np.ascontiguousarray(gyr, float)
+    t, acc, gyr, stationary = check_filter_inputs(t, acc, gyr, stationary, start)
     n = len(t)
-    stationary = np.ascontiguousarray(stationary, bool)
-    if stationary.shape != (n,) or acc.shape != (n, 3) or gyr.shape != (n, 3):
-        raise ValueError(f"run_filter: shapes t {t.shape}, acc {acc.shape}, gyr {gyr.shape}, stationary "
-                         f"{stationary.shape} do not match (N,), (N,3), (N,3), (N,)")
-    if not 0 <= start < n:
-        raise ValueError(f"run_filter: start sample {start} outside 0..{n - 1}")
-    mode, acc_mid, gyr_mid = mechanisation_inputs(t, acc, gyr, method)
-    stance_velocity = _per_sample_stance_velocity(stance_velocity, (n,))
-    zaru = stationary if config.zaru else np.zeros(n, bool)
-    out = _outputs((n,), config.states)
+    mode = mechanisation_mode(method)
+    stance_velocity = per_sample_stance_velocity(stance_velocity, (n,))
+    out = empty_outputs((n,), config.states)
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
     out.skipped_updates = kernels.filter_run(
-        mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, stance_velocity, int(start), q0,
-        np.asarray(vel0, float), np.asarray(pos0, float), config.for_kernel(), bool(rts),
-        out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr, out.gsens, out.p_diag)
+        mode, t, acc, gyr, stationary, stance_velocity, int(start), q0, np.asarray(vel0, float),
+        np.asarray(pos0, float), config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc,
+        out.bias_gyr, out.gsens, out.p_diag)
     return out
 
 
@@ -217,24 +225,11 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
     if acc.ndim != 3 or acc.shape[2] != 3 or gyr.shape != acc.shape:
         raise ValueError(f"run_filter_batch: acc {acc.shape} and gyr {gyr.shape} must both be (R, N, 3)")
     runs, n = acc.shape[:2]
-    t = np.asarray(t, float)
-    shared_time = t.ndim == 1
-    t = np.ascontiguousarray(np.broadcast_to(t, (runs, n)))
+    t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, float), (runs, n)))
     stationary = np.ascontiguousarray(np.broadcast_to(np.asarray(stationary, bool), (runs, n)))
-    if method == "increments":
-        mode, acc_mid, gyr_mid = MODE_INCREMENTS, acc, gyr
-    elif shared_time:  # interpolate every run at once along the common time axis
-        mode = MODE_POINT_SAMPLES
-        acc_mid = np.ascontiguousarray(mid_samples(t[0], acc.transpose(1, 0, 2)).transpose(1, 0, 2))
-        gyr_mid = np.ascontiguousarray(mid_samples(t[0], gyr.transpose(1, 0, 2)).transpose(1, 0, 2))
-    else:
-        mode = MODE_POINT_SAMPLES
-        acc_mid = np.stack([mid_samples(t[r], acc[r]) for r in range(runs)])
-        gyr_mid = np.stack([mid_samples(t[r], gyr[r]) for r in range(runs)])
     if stance_velocity is not None and np.ndim(stance_velocity) == 2:  # one constant per run
         stance_velocity = np.asarray(stance_velocity, float)[:, None, :]
-    stance_velocity = _per_sample_stance_velocity(stance_velocity, (runs, n))
-    zaru = stationary if config.zaru else np.zeros((runs, n), bool)
+    stance_velocity = per_sample_stance_velocity(stance_velocity, (runs, n))
     q0 = np.asarray(quat0, float).reshape(runs, 4)
     q0 = np.ascontiguousarray(q0 / np.linalg.norm(q0, axis=1, keepdims=True))
     vel0 = np.zeros((runs, 3)) if vel0 is None else np.ascontiguousarray(np.broadcast_to(vel0, (runs, 3)), float)
@@ -243,10 +238,10 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
                                                                                np.int64)
     if np.any(start < 0) or np.any(start >= n):
         raise ValueError(f"run_filter_batch: start samples {start} outside 0..{n - 1}")
-    out = _outputs((runs, n), config.states)
+    out = empty_outputs((runs, n), config.states)
     skipped = np.zeros(runs, np.int64)
-    kernels.filter_batch(mode, t, acc, gyr, acc_mid, gyr_mid, stationary, zaru, stance_velocity, start, q0, vel0,
-                         pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc, out.bias_gyr,
-                         out.gsens, out.p_diag, skipped)
+    kernels.filter_batch(mechanisation_mode(method), t, acc, gyr, stationary, stance_velocity, start,
+                         q0, vel0, pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc,
+                         out.bias_gyr, out.gsens, out.p_diag, skipped)
     out.skipped_updates = skipped
     return out

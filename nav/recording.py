@@ -15,10 +15,16 @@ A recording is a folder anyone can read without this project:
 ``reference.csv`` (measured recordings, optional)
     ``t, pos_x, pos_y, pos_z`` in the recording's world frame (m), on the IMU clock.
 ``meta.json``
-    schema version, generator, frames and units of every column, gait/path/sensor parameters, seed.
-``recording.npz`` (optional)
-    a binary twin of the CSVs for speed; the CSVs stay the reference: the twin holds the SHA-256 of the CSVs it
-    was written with (``csv_sha256``), and the reader uses it only while that still matches the CSVs.
+    schema version, generator, frames and units of every column, gait/path/sensor parameters, seed, and how the
+    tables are stored (``storage``: form, the resolution of rounded columns, SHA-256 of every table file).
+
+Storage (:mod:`nav.storage`): each table is ``NAME.csv.gz`` (gzip-compressed CSV, the default) or ``NAME.csv``
+(``form="csv"``). Every value is stored exactly (float64 round trip) except the truth's position, velocity and
+attitude, stored to :data:`TRUTH_RESOLUTION` (1 nm, 1 nm/s, 1e-12): the increments ``dv``, ``dth``, the rates,
+specific force and times stay exact. A table may have a Parquet twin ``NAME.parquet`` (optional, pyarrow) for
+speed; the CSVs stay the reference: a twin holds the SHA-256 of the CSV file it was written with, and the reader
+uses it only while that still matches the CSV. (The ``recording.npz`` twin of older folders is not read: their
+CSVs are.)
 
 This module belongs to ``nav`` so that the filter can read any recording without the simulator;
 ``gaitsim`` imports it to write them.
@@ -26,7 +32,6 @@ This module belongs to ``nav`` so that the filter can read any recording without
 
 from __future__ import annotations
 
-import hashlib
 import json
 import warnings
 from dataclasses import dataclass, field
@@ -34,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import storage
 from .constants import DEFAULT_GRAVITY
 from .files import atomic_output_dir
 
@@ -47,11 +53,10 @@ TRUTH_COLUMNS = (
 )
 EVENT_COLUMNS = ("stride", "t_ic", "t_ff", "t_ho", "t_to", "disp_x", "disp_y", "disp_z")
 REFERENCE_COLUMNS = ("t", "pos_x", "pos_y", "pos_z")
-# (table key, file name, columns) of every CSV file of a recording, in the order the twin's digest reads them
-CSV_FILES = (("imu", "imu.csv", IMU_COLUMNS), ("truth", "truth.csv", TRUTH_COLUMNS),
-             ("events", "events.csv", EVENT_COLUMNS), ("reference", "reference.csv", REFERENCE_COLUMNS))
-TWIN_FILE = "recording.npz"
-TWIN_DIGEST_KEY = "csv_sha256"  # array in the twin holding csv_digest() of the CSVs it was written with
+TABLE_COLUMNS = {"imu": IMU_COLUMNS, "truth": TRUTH_COLUMNS, "events": EVENT_COLUMNS, "reference": REFERENCE_COLUMNS}
+# decimal places (of m, m/s, 1) to which the truth's position, velocity and attitude are stored; every other column
+# is stored exactly. 1 nm is 65x below the strapdown-on-increments error of a 100 m walk (README).
+TRUTH_RESOLUTION = {"pos": 9, "vel": 9, "q": 12}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}  # unit of a file's time columns -> s per unit
 MAX_TRUTH_CLOCK_SHARE = 0.01  # truth and IMU times on equal rows may differ by half a period + this share of
 # the span (timestamp jitter and clock error of a simulated sensor)
@@ -179,13 +184,18 @@ class Recording:
         return float(self.meta.get("sampling", {}).get("gravity_mps2", DEFAULT_GRAVITY))
 
 
-def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray) -> None:
-    """Write a table with a header row of column names; ``%.17g`` round-trips float64 exactly."""
-    np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> None:
+    """Write a table with a header row of column names, gzip-compressed when ``path`` ends in ``.gz``.
+
+    Values round-trip float64 exactly (``%.17g``) except in columns whose name before ``_`` is a key of
+    ``resolution`` (decimal places; see :func:`nav.storage.column_formats`).
+    """
+    storage.write_text(path, storage.table_text(header, table, resolution))
 
 
 def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
-    """The (M, len(header)) table of a CSV written by :func:`write_csv` (NaN cells allowed: the caller decides).
+    """The (M, len(header)) table of a CSV (plain or ``.gz``) written by :func:`write_csv` (NaN cells allowed: the
+    caller decides).
 
     Raises
     ------
@@ -195,7 +205,7 @@ def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
     """
     path = Path(path)
     try:
-        with open(path, encoding="utf-8") as fh:
+        with storage.open_text(path) as fh:
             first = fh.readline().strip().split(",")
             if tuple(first) != header:
                 raise RecordingError(f"{path}: line 1: header {first} does not match the expected columns "
@@ -205,6 +215,8 @@ def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
         raise RecordingError(f"{path}: file not found") from None
     except UnicodeDecodeError as exc:
         raise RecordingError(f"{path}: not a text CSV file ({exc.reason} at byte {exc.start})") from None
+    except (OSError, EOFError) as exc:  # gzip.BadGzipFile, a truncated .gz
+        raise RecordingError(f"{path}: not a readable gzip file ({type(exc).__name__}: {exc})") from None
     except ValueError as exc:
         _raise_bad_cell(path, header)
         raise RecordingError(f"{path}: not a table of numbers ({exc})") from None
@@ -217,7 +229,7 @@ def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:
 
 def _raise_bad_cell(path: Path, header: tuple[str, ...]) -> None:
     """Find the first line of ``path`` that numpy could not parse and raise naming its line and column."""
-    with open(path, encoding="utf-8") as fh:
+    with storage.open_text(path) as fh:
         fh.readline()
         for line_number, line in enumerate(fh, start=2):
             if not line.strip():
@@ -251,27 +263,52 @@ def require_finite(table: np.ndarray, header: tuple[str, ...], name: str) -> Non
                              f"data row {first}, line {first + 1}); every value must be finite")
 
 
-def write_recording_into(rec: Recording, folder: Path, binary: bool = True) -> None:
+def table_file(folder: Path, name: str) -> Path | None:
+    """The file holding table ``name`` ("imu", "truth", ...) in ``folder``: ``name.csv.gz`` or ``name.csv``; None
+    if neither exists; RecordingError naming both if both do (which one is meant is unknown)."""
+    found = [Path(folder) / f"{name}.{form}" for form in storage.FORMS if (Path(folder) / f"{name}.{form}").exists()]
+    if len(found) > 1:
+        raise RecordingError(f"{folder}: both {found[0].name} and {found[1].name}; keep one of them")
+    return found[0] if found else None
+
+
+def _tables(rec: Recording) -> dict[str, np.ndarray]:
+    tables = {"imu": np.column_stack([rec.t, rec.acc, rec.gyr])}
+    if rec.truth is not None:
+        tables["truth"] = rec.truth.as_table()
+    if rec.events is not None:
+        tables["events"] = rec.events.as_table()
+    if rec.reference is not None:
+        tables["reference"] = np.column_stack([rec.reference.t, rec.reference.pos])
+    return tables
+
+
+def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAULT_FORM, parquet: bool = False) -> None:
     """Write ``rec`` into an existing (temporary) folder. Prefer :func:`write_recording`."""
     folder = Path(folder)
-    write_csv(folder / "imu.csv", IMU_COLUMNS, np.column_stack([rec.t, rec.acc, rec.gyr]))
-    arrays = {"imu": np.column_stack([rec.t, rec.acc, rec.gyr])}
-    if rec.truth is not None:
-        arrays["truth"] = rec.truth.as_table()
-        write_csv(folder / "truth.csv", TRUTH_COLUMNS, arrays["truth"])
-    if rec.events is not None:
-        arrays["events"] = rec.events.as_table()
-        write_csv(folder / "events.csv", EVENT_COLUMNS, arrays["events"])
-    if rec.reference is not None:
-        arrays["reference"] = np.column_stack([rec.reference.t, rec.reference.pos])
-        write_csv(folder / "reference.csv", REFERENCE_COLUMNS, arrays["reference"])
+    storage.check_form(form)
+    files = {}
+    for name, table in _tables(rec).items():
+        path = folder / f"{name}.{form}"
+        resolution = TRUTH_RESOLUTION if name == "truth" else None
+        write_csv(path, TABLE_COLUMNS[name], table, resolution)
+        files[path.name] = storage.sha256(path)
+        if parquet:
+            twin = storage.write_twin(path, TABLE_COLUMNS[name],
+                                      table if resolution is None else read_csv(path, TABLE_COLUMNS[name]))
+            files[twin.name] = storage.sha256(twin)
     meta = dict(rec.meta)
     meta.setdefault("schema_version", SCHEMA_VERSION)
-    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if (folder / k).exists() or k == "imu.csv"})
+    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if k.split(".")[0] in _tables(rec)})
+    meta["storage"] = {
+        "form": form,
+        "exact": "every column is stored as float64 round trip (%.17g) except those in 'resolution'",
+        "resolution": ({"truth": {f"{k}_*": 10.0 ** -v for k, v in TRUTH_RESOLUTION.items()}}
+                       if rec.truth is not None else {}),
+        "sha256": files,
+    }
     with open(folder / "meta.json", "w") as fh:
         json.dump(meta, fh, indent=2, sort_keys=True, default=_json_default)
-    if binary:
-        np.savez(folder / TWIN_FILE, **arrays, **{TWIN_DIGEST_KEY: np.array(csv_digest(folder))})
 
 
 def _json_default(o):
@@ -282,26 +319,21 @@ def _json_default(o):
     raise TypeError(f"meta.json: cannot serialise {type(o).__name__}")
 
 
-def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False, binary: bool = True) -> Path:
-    """Write a recording folder atomically: an interrupted write leaves nothing at ``folder``."""
+def write_recording(rec: Recording, folder: str | Path, overwrite: bool = False, form: str = storage.DEFAULT_FORM,
+                    parquet: bool = False) -> Path:
+    """Write a recording folder atomically: an interrupted write leaves nothing at ``folder``.
+
+    Parameters
+    ----------
+    rec : the recording.
+    folder : the output folder.
+    overwrite : replace an existing non-empty folder.
+    form : "csv.gz" (default) or "csv": how every table is stored (:mod:`nav.storage`).
+    parquet : also write a Parquet twin of every table (needs pyarrow).
+    """
     with atomic_output_dir(folder, overwrite) as tmp:
-        write_recording_into(rec, tmp, binary=binary)
+        write_recording_into(rec, tmp, form=form, parquet=parquet)
     return Path(folder)
-
-
-def csv_digest(folder: str | Path) -> str:
-    """SHA-256 (hex) of the recording's CSV files (names and bytes, in :data:`CSV_FILES` order): what a binary
-    twin must carry to be used instead of them."""
-    digest = hashlib.sha256()
-    for _key, name, _columns in CSV_FILES:
-        path = Path(folder) / name
-        if path.exists():
-            digest.update(name.encode() + b"\0")
-            with open(path, "rb") as fh:
-                for block in iter(lambda: fh.read(1 << 20), b""):
-                    digest.update(block)
-            digest.update(b"\0")
-    return digest.hexdigest()
 
 
 def _read_meta(folder: Path) -> dict:
@@ -317,26 +349,11 @@ def _read_meta(folder: Path) -> dict:
     return meta
 
 
-def _twin_tables(folder: Path) -> dict | None:
-    """The tables of ``recording.npz`` if it carries the digest of the CSVs beside it, else None (with a
-    :class:`RecordingWarning` saying why it is ignored)."""
-    path = folder / TWIN_FILE
-    if not path.exists():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as twin:
-            tables = {k: twin[k] for k in twin.files}
-    except Exception as exc:  # any unreadable twin (bad zip, truncated, not an npz) falls back to the CSVs
-        warnings.warn(f"{path}: unreadable binary twin ({type(exc).__name__}: {exc}); reading the CSVs",
-                      RecordingWarning, stacklevel=3)
-        return None
-    stored = str(tables.pop(TWIN_DIGEST_KEY, ""))
-    if stored != csv_digest(folder):
-        warnings.warn(f"{path}: ignored: it {'carries no' if not stored else 'does not carry the current'} digest of "
-                      "the CSV files beside it (the CSVs are the reference); reading the CSVs", RecordingWarning,
-                      stacklevel=3)
-        return None
-    return tables
+def _read_table(path: Path, columns: tuple[str, ...], prefer_binary: bool) -> np.ndarray:
+    """The table of the CSV ``path``, from its Parquet twin when ``prefer_binary`` and the twin carries the CSV's
+    SHA-256 (else a :class:`RecordingWarning` says why the twin is ignored)."""
+    twin = storage.read_twin(path, columns, RecordingWarning) if prefer_binary else None
+    return twin if twin is not None else read_csv(path, columns)
 
 
 def _time_columns(key: str) -> list[int]:
@@ -349,9 +366,9 @@ def read_recording(folder: str | Path, prefer_binary: bool = True, time_unit: st
 
     Parameters
     ----------
-    folder : the recording folder (``imu.csv`` required).
-    prefer_binary : use ``recording.npz`` instead of parsing the CSVs when it carries the digest of the CSVs
-        beside it (:func:`csv_digest`); a twin without it, with another, or unreadable is ignored with a
+    folder : the recording folder (``imu.csv.gz`` or ``imu.csv`` required).
+    prefer_binary : read a table's Parquet twin instead of parsing its CSV when the twin carries the SHA-256 of
+        the CSV beside it; a twin without it, with another, or unreadable is ignored with a
         :class:`RecordingWarning`. The CSVs are the reference.
     time_unit : unit of every time column in the files (one of :data:`TIME_UNITS`); converted to s here.
 
@@ -366,23 +383,19 @@ def read_recording(folder: str | Path, prefer_binary: bool = True, time_unit: st
     folder = Path(folder)
     if time_unit not in TIME_UNITS:
         raise RecordingError(f"time_unit = {time_unit!r}; allowed: {', '.join(TIME_UNITS)}")
-    if not (folder / "imu.csv").is_file():
-        raise RecordingError(f"{folder}: not a recording folder (no imu.csv)")
+    files = {key: table_file(folder, key) for key in TABLE_COLUMNS}
+    files = {key: path for key, path in files.items() if path is not None}
+    if "imu" not in files:
+        raise RecordingError(f"{folder}: not a recording folder (no imu.csv.gz or imu.csv)")
     meta = _read_meta(folder)
-    tables = _twin_tables(folder) if prefer_binary else None
-    if tables is None:
-        tables = {key: read_csv(folder / name, columns) for key, name, columns in CSV_FILES
-                  if key == "imu" or (folder / name).exists()}
-    for key, name, columns in CSV_FILES:
-        if key in tables:
-            table = np.asarray(tables[key], float)
-            if table.ndim != 2 or table.shape[1] != len(columns) or table.shape[0] == 0:
-                raise RecordingError(f"{folder / name}: table of shape {table.shape}; expected (rows >= 1, "
-                                     f"{len(columns)})")
-            table = table.copy()
-            table[:, _time_columns(key)] *= TIME_UNITS[time_unit]
-            tables[key] = table
-    flags = _check_tables(folder, tables)
+    tables = {}
+    for key, path in files.items():
+        table = _read_table(path, TABLE_COLUMNS[key], prefer_binary).copy()
+        if table.shape[0] == 0:
+            raise RecordingError(f"{path}: no data rows")
+        table[:, _time_columns(key)] *= TIME_UNITS[time_unit]
+        tables[key] = table
+    flags = _check_tables({key: str(path) for key, path in files.items()}, tables)
     imu = tables["imu"]
     rec = Recording(t=imu[:, 0].copy(), acc=imu[:, 1:4].copy(), gyr=imu[:, 4:7].copy(), meta=meta, flags=flags)
     if "truth" in tables:
@@ -405,10 +418,11 @@ def _increasing(t: np.ndarray, name: str) -> None:
                              f"after {t[row - 2]!r}); time must increase")
 
 
-def _check_tables(folder: Path, tables: dict) -> dict:
-    """Finite values, increasing time and matching time spans across the files; returns the reader's flags."""
+def _check_tables(names: dict[str, str], tables: dict) -> dict:
+    """Finite values, increasing time and matching time spans across the files (``names``: table key -> file
+    name for messages); returns the reader's flags."""
     imu = tables["imu"]
-    require_finite(imu, IMU_COLUMNS, str(folder / "imu.csv"))
+    require_finite(imu, IMU_COLUMNS, names["imu"])
     t = imu[:, 0]
     period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     span = (t[0], t[-1])
@@ -416,20 +430,20 @@ def _check_tables(folder: Path, tables: dict) -> dict:
     flags = {}
     if "truth" in tables:
         truth = tables["truth"]
-        name = str(folder / "truth.csv")
+        name = names["truth"]
         require_finite(truth, TRUTH_COLUMNS, name)
         _increasing(truth[:, 0], name)
         if len(truth) == len(imu):
             offset = float(np.max(np.abs(truth[:, 0] - t)))
             if offset > 0.5 * period + MAX_TRUTH_CLOCK_SHARE * (span[1] - span[0]):
-                raise RecordingError(f"{name}: column t differs from imu.csv's by up to {offset:.6g} s with the same "
+                raise RecordingError(f"{name}: column t differs from the IMU file's by up to {offset:.6g} s with the same "
                                      "number of rows; the two files are not on one clock")
         elif truth[0, 0] > span[0] + slack or truth[-1, 0] < span[1] - slack:
             raise RecordingError(f"{name}: {len(truth)} rows over t = {truth[0, 0]:.6g}..{truth[-1, 0]:.6g} s do not "
-                                 f"cover imu.csv's {len(imu)} rows over t = {span[0]:.6g}..{span[1]:.6g} s")
+                                 f"cover the IMU file's {len(imu)} rows over t = {span[0]:.6g}..{span[1]:.6g} s")
     if "events" in tables:
         events = tables["events"]
-        name = str(folder / "events.csv")
+        name = names["events"]
         require_finite(events, EVENT_COLUMNS, name)
         times = events[:, 1:5]
         order = np.diff(times, axis=1)
@@ -438,11 +452,11 @@ def _check_tables(folder: Path, tables: dict) -> dict:
             raise RecordingError(f"{name}: data row {row}: events out of order (t_ic <= t_ff <= t_ho <= t_to "
                                  f"required): {times[row - 1].tolist()}")
         if times.min() < span[0] - slack or times.max() > span[1] + slack:
-            raise RecordingError(f"{name}: event times {times.min():.6g}..{times.max():.6g} s fall outside imu.csv's "
+            raise RecordingError(f"{name}: event times {times.min():.6g}..{times.max():.6g} s fall outside the IMU file's "
                                  f"{span[0]:.6g}..{span[1]:.6g} s")
     if "reference" in tables:
         ref = tables["reference"]
-        name = str(folder / "reference.csv")
+        name = names["reference"]
         require_finite(ref[:, :1], REFERENCE_COLUMNS[:1], name)
         _increasing(ref[:, 0], name)
         gaps, first = nonfinite_cells(ref[:, 1:], REFERENCE_COLUMNS[1:])
@@ -452,7 +466,7 @@ def _check_tables(folder: Path, tables: dict) -> dict:
             warnings.warn(f"{name}: {rows} of {len(ref)} rows hold NaN positions (per column {gaps}; first in data "
                           f"row {first}): tracking dropouts, left out of scoring", RecordingWarning, stacklevel=3)
         if ref[-1, 0] < span[0] or ref[0, 0] > span[1]:
-            raise RecordingError(f"{name}: t = {ref[0, 0]:.6g}..{ref[-1, 0]:.6g} s does not overlap imu.csv's "
+            raise RecordingError(f"{name}: t = {ref[0, 0]:.6g}..{ref[-1, 0]:.6g} s does not overlap the IMU file's "
                                  f"{span[0]:.6g}..{span[1]:.6g} s")
     return flags
 
@@ -460,9 +474,10 @@ def _check_tables(folder: Path, tables: dict) -> dict:
 def list_runs(folder: str | Path) -> list[Path]:
     """The recordings in ``folder``: itself if it is one, else its ``run-NNN`` subfolders in order."""
     folder = Path(folder)
-    if (folder / "imu.csv").exists():
+    if table_file(folder, "imu") is not None:
         return [folder]
-    runs = sorted(p for p in folder.glob("run-*") if (p / "imu.csv").exists())
+    runs = sorted(p for p in folder.glob("run-*") if table_file(p, "imu") is not None)
     if not runs:
-        raise RecordingError(f"{folder}: neither a recording (imu.csv) nor a folder of run-NNN recordings")
+        raise RecordingError(f"{folder}: neither a recording (imu.csv.gz or imu.csv) nor a folder of run-NNN "
+                             "recordings")
     return runs

@@ -97,24 +97,22 @@ def integrate(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, quat0: np.ndarray
     -------
     Trajectory on the N samples.
     """
-    if method not in METHODS:
-        raise ValueError(f"strapdown method {method!r} is not one of {METHODS}")
     t = np.ascontiguousarray(t, float)
     acc = np.ascontiguousarray(acc, float)
     gyr = np.ascontiguousarray(gyr, float)
-    mode, acc_mid, gyr_mid = mechanisation_inputs(t, acc, gyr, method)
     n = len(t)
     quat = np.empty((n, 4))
     vel = np.empty((n, 3))
     pos = np.empty((n, 3))
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
-    strapdown_run(mode, t, acc, gyr, acc_mid, gyr_mid, 0, q0, np.asarray(vel0, float),
-                           np.asarray(pos0, float), float(gravity), quat, vel, pos)
+    strapdown_run(mechanisation_mode(method), t, acc, gyr, 0, q0, np.asarray(vel0, float), np.asarray(pos0, float),
+                  float(gravity), quat, vel, pos)
     return Trajectory(t=t, quat=quat, vel=vel, pos=pos)
 
 
-def mechanisation_inputs(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, method: str):
-    """Kernel mode and mid-interval samples for ``method`` (the mid samples are unused for increments)."""
-    if method == "increments":
-        return MODE_INCREMENTS, acc, gyr
-    return MODE_POINT_SAMPLES, mid_samples(t, acc), mid_samples(t, gyr)
+def mechanisation_mode(method: str) -> int:
+    """The compiled kernels' code for ``method`` (they interpolate the mid samples of "rk4" themselves, with
+    the weights of :func:`mid_samples`)."""
+    if method not in METHODS:
+        raise ValueError(f"strapdown method {method!r} is not one of {METHODS}")
+    return MODE_INCREMENTS if method == "increments" else MODE_POINT_SAMPLES

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gaitsim.errors import ScenarioError
-from gaitsim.imu.config import sensor_from_table
+from gaitsim.imu.config import changed_sensor, sensor_from_table
 from gaitsim.imu.presets import PAPER_G_SENSITIVITY, PRESET_NAMES, get_preset
 from gaitsim.imu.units import STANDARD_GRAVITY, to_si
 
@@ -109,3 +109,15 @@ def test_shipped_scenarios_select_their_preset(file, preset):
     scenario = tomllib.loads((SCENARIOS / file).read_text())
     spec = sensor_from_table(scenario["sensor"], where=f"{file} [sensor]")
     assert spec.name == preset and scenario["sampling"]["rate_hz"] == 800.0
+
+
+def test_a_sensor_change_may_set_the_filter_order_and_nothing_else_plain():
+    """The loop's first-order bandwidth effect changes filter_order on the twin's existing sensor."""
+    base = get_preset("bmi160")
+    changed = changed_sensor(base, {"accel_bandwidth": [25.0, "Hz"], "filter_order": 1})
+    assert changed.filter_order == 1 and changed["accel_bandwidth"] == pytest.approx(25.0)
+    assert base.filter_order == 2
+    with pytest.raises(ScenarioError, match="filter_order"):
+        changed_sensor(base, {"filter_order": 0})
+    with pytest.raises(ScenarioError, match="preset"):
+        changed_sensor(base, {"preset": "vn200"})

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from gaitsim.cli import main
-from gaitsim.loop import axes, blind, frame, navigation
+from gaitsim.loop import blind, frame, navigation
+from gaitsim.measured import axes
 from nav.recording import Recording, Reference, RecordingError, write_recording
 
 
@@ -17,9 +18,9 @@ def walk():
 
 
 def test_axis_map_parses_formats_and_maps_both_sensors(walk):
-    m = axes.parse_axes("y,-x,z")
+    m = axes.parse_axis_map("y,-x,z")
     np.testing.assert_array_equal(m, [[0, 1, 0], [-1, 0, 0], [0, 0, 1]])
-    assert axes.format_axes(m) == "y,-x,z"
+    assert axes.axis_map_text(m) == "y,-x,z"
     mapped = axes.remapped(walk, m)
     np.testing.assert_array_equal(mapped.acc[:, 1], -walk.acc[:, 0])
     np.testing.assert_array_equal(mapped.gyr[:, 0], walk.gyr[:, 1])
@@ -28,21 +29,21 @@ def test_axis_map_parses_formats_and_maps_both_sensors(walk):
 
 @pytest.mark.parametrize("text", ["x,y", "x,x,z", "a,b,c", "x,--y,z", ""])
 def test_malformed_axis_map_is_refused_naming_it(text):
-    with pytest.raises(ValueError, match="--axes"):
-        axes.parse_axes(text)
+    with pytest.raises(axes.AxisMapError, match="axis map"):
+        axes.parse_axis_map(text)
 
 
 @pytest.mark.parametrize("text", ["x,y,z", "x,-y,-z", "y,-x,z", "-x,-y,z", "x,y,-z", "y,x,z", "z,y,-x", "-y,x,z"])
 def test_frame_check_finds_the_map_back_to_the_body_frame(walk, text):
     """Law: whatever signed permutation (mirrors included) the logger applied, the check's map undoes it."""
-    applied = axes.parse_axes(text)
+    applied = axes.parse_axis_map(text)
     found = frame.check_frame(axes.remapped(walk, applied))
     np.testing.assert_array_equal(found.axes @ applied, np.eye(3))
     assert found.is_body_frame == (text == "x,y,z")
 
 
 def test_a_z_down_recording_is_refused_with_the_map_and_accepted_with_it(walk):
-    z_down = axes.remapped(walk, axes.parse_axes("x,-y,-z"))
+    z_down = axes.remapped(walk, axes.parse_axis_map("x,-y,-z"))
     with pytest.raises(frame.FrameError, match="--axes x,-y,-z"):
         frame.require_body_frame(z_down)
     fixed, check = frame.require_body_frame(z_down, "x,-y,-z")
@@ -81,7 +82,7 @@ def test_bad_recordings_fail_cleanly_with_nothing_written(walk, tmp_path, capsys
         acc, gyr = acc * [1, -1, -1], gyr * [1, -1, -1]
     else:
         t, acc, gyr = t[:300], acc[:300], gyr[:300]
-    write_recording(Recording(t, acc, gyr, meta={}), tmp_path / "rec", binary=False)
+    write_recording(Recording(t, acc, gyr, meta={}), tmp_path / "rec")
     code = main(["loop", str(tmp_path / "rec"), "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert code != 0 and "every recording failed" in err

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from gaitsim.loop import effects as fx
 from gaitsim.loop import residuals, settings
 from gaitsim.loop.signature import signature
 from gaitsim.scenario import scenario_from_dict
@@ -84,3 +85,15 @@ def test_clipping_shows_as_flat_tops_and_a_sharp_peak_does_not():
     acc = np.stack([force, 0.1 * force, np.full_like(t, 9.81)], axis=1)
     assert clipped_runs(acc) == 0  # the samples beside a 10 ms peak read 78 % of it
     assert clipped_runs(np.clip(acc, -40.0, 40.0)) == 5  # three samples beyond the range at each peak
+
+
+def test_scale_effects_compose_on_the_twins_matrix_instead_of_replacing_it():
+    """An axis scale named after an equal scale (or the other way round) multiplies the twin's matrix: its
+    magnitude is the axis's own error, and neither effect erases the other."""
+    twin = np.eye(3) * 1.02
+    axis = np.array(fx.BY_NAME["accel_scale_x"].changes(3.0, {"accel_misalignment": twin.tolist()})["sensor"][
+        "accel_misalignment"][0])
+    np.testing.assert_allclose(np.diag(axis), [1.02 * 1.03, 1.02, 1.02])
+    equal = np.array(fx.BY_NAME["accel_scale"].changes(-1.0, {"accel_misalignment": axis.tolist()})["sensor"][
+        "accel_misalignment"][0])
+    np.testing.assert_allclose(equal, axis * 0.99)

@@ -9,7 +9,7 @@ from nav_synthetic import synthetic_walk
 from gaitsim import cli
 from nav import pipeline
 from nav.ekf import FilterConfig
-from nav.recording import Recording, write_recording
+from nav.recording import Recording, read_recording, write_recording
 from nav.solution import SOLUTION_COLUMNS, read_solution_csv
 
 
@@ -36,7 +36,7 @@ def test_nav_writes_solution_and_score(recording, tmp_path):
     table = read_solution_csv(out / "solution.csv")
     assert table.shape[1] == len(SOLUTION_COLUMNS)
     options = pipeline.NavOptions(filter=FilterConfig(states=15), rts=True)
-    sol, expected = pipeline.run(rec, options)
+    sol, expected = pipeline.run(read_recording(folder), options)  # the folder as stored (truth to 1e-12)
     np.testing.assert_allclose(table[:, 1:4], sol.pos[sol.start:], rtol=0, atol=1e-12)
     assert score["along_track_error_m"] == pytest.approx(expected["along_track_error_m"], abs=1e-12)
 

@@ -37,10 +37,28 @@ def test_heading_drift_from_attitude_and_from_track():
     s = metrics.score(t, truth, t, truth, q_est, q_true)
     assert s["heading_drift_deg_per_s"] == pytest.approx(0.028, rel=1e-9)
     assert s["heading_drift_deg_per_100m"] == pytest.approx(0.028 * 100.0 / 100.0 * 100, rel=1e-6)
+    assert s["heading_drift_source"].startswith("attitude")
     # a track turned by a constant angle seen from the start: zero drift, not a rate
     c, s_ = np.cos(0.01), np.sin(0.01)
     turned = truth @ np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]]).T
-    assert metrics.score(t, turned, t, truth)["heading_drift_deg_per_s"] == pytest.approx(0.0, abs=1e-12)
+    with pytest.warns(metrics.HeadingDriftWarning, match="no estimate and reference attitude"):
+        fallback = metrics.score(t, turned, t, truth)
+    assert fallback["heading_drift_deg_per_s"] == pytest.approx(0.0, abs=1e-12)
+    assert fallback["track_heading_drift_deg_per_s"] == fallback["heading_drift_deg_per_s"]
+    assert "no estimate and reference attitude" in fallback["heading_drift_source"]
+
+
+def test_track_heading_drift_is_reported_beside_the_attitude_drift():
+    t, truth = straight_north()
+    rate = math.radians(0.05)  # rad/s: the estimate's track turns left at this rate from the start
+    heading = rate * t
+    step = np.diff(truth[:, 1], prepend=0.0)
+    est = np.column_stack([-np.cumsum(step * np.sin(heading)), np.cumsum(step * np.cos(heading)), truth[:, 2]])
+    q_true = yaw_quat(np.full(len(t), np.pi / 2))
+    s = metrics.score(t, est, t, truth, yaw_quat(np.pi / 2 + heading), q_true)
+    assert s["heading_drift_deg_per_s"] == pytest.approx(0.05, rel=1e-9)
+    # seen from the start, a track turning at a constant rate turns at half that rate (the chord's angle)
+    assert s["track_heading_drift_deg_per_s"] == pytest.approx(0.025, rel=0.05)
 
 
 def test_ate_after_se2_alignment_removes_a_rigid_motion():

@@ -1,11 +1,11 @@
 """The runner's cache key (code and input-file content), dying workers, stale temporaries; the range table."""
 
+import math
 import os
 import shutil
 import signal
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -14,6 +14,7 @@ import pytest
 from gaitsim.experiments.runner import run_tasks
 from gaitsim.ranges import RANGES, ranges_markdown
 from gaitsim.scenario import WORLD_SECTIONS, scenario_keys
+from gaitsim.world.gait import GaitParams
 from nav.files import atomic_output_dir, remove_stale_temporaries
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -145,3 +146,13 @@ def test_every_numeric_world_key_has_a_range_and_the_docs_table_is_the_code():
             if isinstance(value, (int, float, tuple)) and not isinstance(value, bool):
                 assert key in RANGES[section], f"[{section}] {key} has no range in gaitsim/ranges.py"
     assert (ROOT / "docs" / "scenario-ranges.md").read_text() == ranges_markdown()
+
+
+def test_the_key_reference_gives_each_key_its_unit_default_and_range():
+    rows = {line.split("|")[1].strip(" `"): [c.strip() for c in line.split("|")[2:-1]]
+            for line in ranges_markdown().splitlines() if line.startswith("| `")}
+    assert rows["rate_hz"] == ["Hz", "800", "[50, 5000]", RANGES["sampling"]["rate_hz"].source]
+    assert rows["length_m"][:3] == ["m", "required", "(0, 100000]"]
+    assert rows["pitch_toe_off_deg"][:2] == ["deg", f"{math.degrees(GaitParams().pitch_toe_off):g}"]
+    assert rows["gyro_range"][:2] == ["rad/s", "inf"] and "deg/s" in rows["gyro_range"][2]
+    assert all(key in rows for table in RANGES.values() for key in table)

@@ -11,7 +11,8 @@ from gaitsim.experiments.setup import targets_from_scenario
 from gaitsim.scenario import load_scenario, scenario_document, scenario_from_dict, with_changes
 from gaitsim.simulate import generate
 from gaitsim.world import path as paths
-from nav.recording import TRUTH_COLUMNS, read_recording
+from nav import storage
+from nav.recording import IMU_COLUMNS, TRUTH_COLUMNS, TRUTH_RESOLUTION, RecordingError, read_recording
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -99,19 +100,58 @@ def test_good_scenario_loads_with_units():
     assert f.rate_hz == 800.0 and f.walk.gait.cadence_steps_per_min == 84.0
 
 
-def test_round_trip_csv_and_binary_identical(tmp_path):
+def _assert_same_recording(back, rec):
+    """Exact columns equal bit for bit; the truth's rounded columns within half their stored resolution."""
+    np.testing.assert_array_equal(back.t, rec.t)
+    np.testing.assert_array_equal(back.acc, rec.acc)
+    np.testing.assert_array_equal(back.gyr, rec.gyr)
+    for name in ("t", "gyr", "acc", "dv", "dth", "stance"):
+        np.testing.assert_array_equal(getattr(back.truth, name), getattr(rec.truth, name))
+    for name, key in (("pos", "pos"), ("vel", "vel"), ("quat", "q")):
+        half = 0.5 * 10.0 ** -TRUTH_RESOLUTION[key]
+        assert np.max(np.abs(getattr(back.truth, name) - getattr(rec.truth, name))) <= half * (1 + 1e-6)
+    np.testing.assert_array_equal(back.events.as_table(), rec.events.as_table())
+    assert back.meta["seed"] == 3 and back.meta["gait"]["stride_length_m"] == 1.4
+
+
+@pytest.mark.parametrize("form", ["csv.gz", "csv"])
+def test_round_trip_in_each_form(form, tmp_path):
     scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
-    (rec,) = generate(scen, tmp_path / "rec")
-    for binary in (True, False):
-        back = read_recording(tmp_path / "rec", prefer_binary=binary)
-        np.testing.assert_array_equal(back.t, rec.t)
-        np.testing.assert_array_equal(back.acc, rec.acc)
-        np.testing.assert_array_equal(back.gyr, rec.gyr)
-        np.testing.assert_array_equal(back.truth.as_table(), rec.truth.as_table())
-        np.testing.assert_array_equal(back.events.as_table(), rec.events.as_table())
-        assert back.meta["seed"] == 3 and back.meta["gait"]["stride_length_m"] == 1.4
-    header = (tmp_path / "rec/truth.csv").read_text().splitlines()[0]
-    assert header == ",".join(TRUTH_COLUMNS)
+    (rec,) = generate(scen, tmp_path / "rec", form=form)
+    names = sorted(p.name for p in (tmp_path / "rec").iterdir())
+    assert names == sorted([f"events.{form}", f"imu.{form}", "meta.json", f"truth.{form}"])  # no binary duplicate
+    back = read_recording(tmp_path / "rec")
+    _assert_same_recording(back, rec)
+    with storage.open_text(tmp_path / f"rec/truth.{form}") as fh:
+        assert fh.readline().strip() == ",".join(TRUTH_COLUMNS)
+    recorded = back.meta["storage"]["sha256"]
+    assert recorded == {name: storage.sha256(tmp_path / "rec" / name) for name in names if name != "meta.json"}
+    (again,) = generate(scen, tmp_path / "again", form=form)  # deterministic bytes (gzip without a timestamp)
+    assert read_recording(tmp_path / "again").meta["storage"]["sha256"] == recorded
+
+
+def test_parquet_twin_is_read_only_while_it_matches_its_csv(tmp_path):
+    pytest.importorskip("pyarrow")
+    scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
+    (rec,) = generate(scen, tmp_path / "rec", parquet=True)
+    assert (tmp_path / "rec/truth.parquet").exists()
+    _assert_same_recording(read_recording(tmp_path / "rec"), rec)
+    np.testing.assert_array_equal(read_recording(tmp_path / "rec").truth.as_table(),
+                                  read_recording(tmp_path / "rec", prefer_binary=False).truth.as_table())
+    # a CSV edited after the twin was written: the twin no longer matches and is ignored, loudly
+    imu = tmp_path / "rec/imu.csv.gz"
+    storage.write_text(imu, storage.table_text(IMU_COLUMNS, np.column_stack([rec.t, rec.acc + 1.0, rec.gyr])))
+    with pytest.warns(UserWarning, match="does not carry the current digest of imu.csv.gz"):
+        back = read_recording(tmp_path / "rec")
+    np.testing.assert_array_equal(back.acc, rec.acc + 1.0)
+
+
+def test_a_folder_with_both_a_csv_and_its_compressed_form_is_refused(tmp_path):
+    scen = scenario_from_dict(__import__("tomllib").loads(GOOD), "tiny")
+    generate(scen, tmp_path / "rec")
+    (tmp_path / "rec/imu.csv").write_text(",".join(IMU_COLUMNS) + "\n")
+    with pytest.raises(RecordingError, match="both imu.csv.gz and imu.csv"):
+        read_recording(tmp_path / "rec")
 
 
 def test_multi_run_output_and_refusal_to_clobber(tmp_path):

@@ -20,6 +20,7 @@ from nav.files import publish_into, write_json
 
 from ..errors import ScenarioError
 
+from ..bundled import scenario_file
 from .runner import run_tasks
 from ..scenario import load_scenario, scenario_from_dict
 from .tracker import TrackerSpec
@@ -31,7 +32,7 @@ from .setup import (calibrate_sensor, fit_stance_velocity, scenario_doc, setting
                     targets_from_scenario)
 from .tasks import walk_task
 
-PAPER = Path(__file__).resolve().parents[2] / "scenarios" / "paper.toml"
+PAPER = scenario_file("paper.toml")
 
 
 def _collect(results: list[dict], tasks: list[dict], prefix: str) -> dict[str, list[dict]]:

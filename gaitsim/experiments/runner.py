@@ -53,6 +53,7 @@ import numpy as np
 from tqdm import tqdm
 
 from nav.files import write_text_atomic
+from nav.storage import sha256
 
 from gaitsim.errors import ScenarioError
 
@@ -290,18 +291,10 @@ def _input_files(value: Any) -> list[str]:
     return []
 
 
-def _file_sha256(path: str) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def task_digest(task: dict) -> str:
     """SHA-256 (hex) of what a run's result depends on: the task's canonical JSON, :func:`code_digest` and the
     content (not the path) of every input file the task names."""
-    files = {path: _file_sha256(path) for path in sorted(set(_input_files(task)))}
+    files = {path: sha256(path) for path in sorted(set(_input_files(task)))}
     content = sorted(files.values())
     return hashlib.sha256(_canonical_json({"task": task, "code": code_digest(), "input_files": content})
                           .encode("utf-8")).hexdigest()
@@ -384,15 +377,33 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
             f"fn {fn!r} cannot be pickled for the worker processes ({exc}); define it at the top level of an "
             "importable module, or pass workers=1 to run in this process"
         ) from exc
-    context = multiprocessing.get_context(_start_method())
-    with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_die_with_parent,
-                                                initargs=(os.getpid(),)) as pool:
+    with process_pool(workers) as pool:
         futures = {pool.submit(_execute, fn, tasks[index]): index for index in pending}
         try:
             for future in concurrent.futures.as_completed(futures):
                 yield futures[future], *_future_outcome(future)
         finally:
             pool.shutdown(wait=False, cancel_futures=True)
+
+
+def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
+    """A local pool of ``workers`` processes under the runner's rules: never forked from a parent holding numba or
+    MuJoCo state, one numba thread each, none outliving the process that started it."""
+    return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(
+        _start_method()), initializer=_start_worker, initargs=(os.getpid(),))
+
+
+def _start_worker(parent_pid: int) -> None:
+    """Worker initializer: one numba thread (the pool parallelises over tasks) and no life beyond the parent's.
+
+    The thread count is set at run time rather than through ``NUMBA_NUM_THREADS``: numba refuses a changed variable
+    once its threads are up, so setting it in a process that has already compiled (a test session, a notebook)
+    breaks that process's next compilation.
+    """
+    import numba
+
+    numba.set_num_threads(1)
+    _die_with_parent(parent_pid)
 
 
 def _die_with_parent(parent_pid: int) -> None:

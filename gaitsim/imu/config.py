@@ -91,9 +91,7 @@ def sensor_from_table(table: dict, where: str = "[sensor]") -> SensorSpec:
     if not isinstance(withhold, bool):
         raise ScenarioError(f"{where} withhold: expected true or false, got {withhold!r}")
     base = get_preset(preset)
-    filter_order = table.get("filter_order", base.filter_order)
-    if isinstance(filter_order, bool) or not isinstance(filter_order, int) or not 1 <= filter_order <= 8:
-        raise ScenarioError(f"{where} filter_order: expected an integer in 1..8, got {filter_order!r}")
+    filter_order = _filter_order(table.get("filter_order", base.filter_order), where)
     overrides = {key: _parse_quantity(key, raw, where) for key, raw in table.items() if key in PARAMETERS}
     try:
         return base.replace(
@@ -104,15 +102,27 @@ def sensor_from_table(table: dict, where: str = "[sensor]") -> SensorSpec:
         raise ScenarioError(f"{where} {exc}") from None
 
 
+def _filter_order(value, where: str) -> int:
+    """The ``filter_order`` key, checked (an integer 1..8)."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 8:
+        raise ScenarioError(f"{where} filter_order: expected an integer in 1..8, got {value!r}")
+    return value
+
+
 def changed_sensor(spec: SensorSpec | None, table: dict, where: str = "[sensor]") -> SensorSpec:
     """``spec`` (None: the ideal sensor) with the quantities of a ``[sensor]``-style table (``[value, "unit"]``
-    entries, converted to SI) replaced; the other keys of a [sensor] table cannot change an existing sensor."""
+    entries, converted to SI) and its ``filter_order`` replaced; the other keys of a [sensor] table (preset,
+    withhold) cannot change an existing sensor."""
     spec = get_preset("ideal") if spec is None else spec
-    refused = [key for key in table if key not in PARAMETERS]
+    refused = [key for key in table if key not in PARAMETERS and key != "filter_order"]
     if refused:
-        raise ScenarioError(f"{where}: key(s) {refused} cannot change a sensor; accepted keys: {list(PARAMETERS)}")
+        raise ScenarioError(f"{where}: key(s) {refused} cannot change a sensor; accepted keys: "
+                            f"{list(PARAMETERS) + ['filter_order']}")
+    changes = {key: _parse_quantity(key, raw, where) for key, raw in table.items() if key != "filter_order"}
+    if "filter_order" in table:
+        changes["filter_order"] = _filter_order(table["filter_order"], where)
     try:
-        return spec.replace(**{key: _parse_quantity(key, raw, where) for key, raw in table.items()})
+        return spec.replace(**changes)
     except ScenarioError as exc:
         raise ScenarioError(f"{where} {exc}") from None
 

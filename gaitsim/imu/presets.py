@@ -5,10 +5,13 @@
 | ideal       | no error     | every term off: output equals input exactly |
 | vn200       | industrial   | VectorNav VN-200 figures of anchors §5 (secondary copies of the datasheet) |
 | paper-vn200 | industrial   | vn200 noise + the seed paper's calibrated b_a, M_a, b_g, M_g, G_g (§II.B) |
-| bmi160      | consumer     | Bosch BMI160 data sheet BST-BMI160-DS000 (noise, typical offsets, 16-bit at +-16 g / +-2000 deg/s) |
-| adis16497   | tactical     | Analog Devices ADIS16497 data sheet Rev. D front page (-1 noise / stability, +-40 g) with the +-2000 deg/s range option |
+| bmi160      | consumer     | Bosch BMI160 data sheet BST-BMI160-DS000 (noise, typical offsets, 16-bit at +-16 g / +-2000 deg/s); UNVERIFIED |
+| adis16497   | tactical     | Analog Devices ADIS16497 data sheet Rev. D front page (-1 noise / stability, +-40 g) with the +-2000 deg/s range option; UNVERIFIED |
 
-Assumptions (not datasheet figures) are stated per preset in its ``source`` text. Every call of
+UNVERIFIED: the bmi160 and adis16497 figures have not been checked against their data sheets' specification
+tables (a search of the stored copies reached only their title and feature pages); use them as plausible
+consumer- and tactical-grade sensors, not as those parts. Assumptions (not datasheet figures) are stated per
+preset in its ``source`` text. Every call of
 :func:`get_preset` builds a new immutable :class:`~gaitsim.imu.model.SensorSpec`; customising the result
 (``spec.replace(...)``) can never change the preset for a later user.
 """
@@ -60,8 +63,8 @@ _PRESETS: dict[str, tuple[str, dict]] = {
     "bmi160": (
         "Bosch BMI160 data sheet (BST-BMI160-DS000): gyro noise 0.007 deg/s/sqrt(Hz), accel noise density "
         "180 ug/sqrt(Hz), typical zero-rate offset 3 deg/s and zero-g offset 40 mg (used here as 1-sigma "
-        "turn-on spreads), 16-bit outputs at +-2000 deg/s and +-16 g. Figures quoted from the data sheet "
-        "from memory, not re-read in this session. No bias-instability figure in the data sheet: left off.",
+        "turn-on spreads), 16-bit outputs at +-2000 deg/s and +-16 g. UNVERIFIED: not checked against the data sheet's "
+        "specification table. No bias-instability figure in the data sheet: left off.",
         {
             "gyro_noise_density": (0.007, "deg/s/sqrt(Hz)"),
             "accel_noise_density": (180.0, "ug/sqrt(Hz)"),
@@ -74,7 +77,8 @@ _PRESETS: dict[str, tuple[str, dict]] = {
         },
     ),
     "adis16497": (
-        "Analog Devices ADIS16497 data sheet Rev. D, features list: 0.09 deg/sqrt(h) ARW and 0.8 deg/h in-run "
+        "Analog Devices ADIS16497 data sheet Rev. D, features list (UNVERIFIED: not checked against the data sheet "
+        "itself): 0.09 deg/sqrt(h) ARW and 0.8 deg/h in-run "
         "stability (ADIS16497-1), accel 13 ug in-run stability, +-40 g; gyro range of the -3 option "
         "(+-2000 deg/s, needed on a foot; the -3 option is noisier than the -1 figures used, so this preset is "
         "optimistic). Assumed (not checked against the data sheet): accel noise 0.008 m/s/sqrt(h), "

@@ -32,7 +32,9 @@
    at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
-   Steps 4-5 repeat for at most ``settings.MAX_ROUNDS`` residuals.
+   Steps 4-5 repeat for at most ``settings.MAX_ROUNDS`` residuals. A significant residual that no effect of the
+   library moves (``rest_gyro_change``: a drifting bias) is reported unexplained before the rounds, without
+   using one (:func:`unmovable`).
 
 The predicted-versus-measured navigation discrepancy is ``|twin - recording|`` of each navigation metric,
 reported for the twin before any effect and after all accepted ones.
@@ -287,6 +289,15 @@ def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list)
     }
 
 
+def unmovable(res: dict, library: tuple) -> list:
+    """The significant residuals (z > ``settings.NOISE_LEVEL``, not ``settings.DERIVED``) that no effect of
+    ``library`` moves, largest z first: the loop reports them unexplained before its rounds, without using one
+    (no effect added later can close them)."""
+    moved = {name for e in library for name in e.moves}
+    return sorted((r for r in res.values() if r.z > settings.NOISE_LEVEL and r.name not in settings.DERIVED
+                   and r.name not in moved), key=lambda r: -r.z)
+
+
 def prepare(rec: Recording, axis_map: str | None = None, distance_m: float | None = None) -> tuple[
         Recording, FrameCheck, NavReference]:
     """Step 0 of the module docstring: the recording checked (:func:`nav.checks.check_recording`), in the body
@@ -333,6 +344,10 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
     fitted = {}  # effect name -> its fit to the current twin (an effect's fit depends on the twin, not on the
     # residual acted on: fitted once per twin)
     ctx = fx.context(rec, base_twin.scenario, measured.signature, before.signature)
+    for acted in unmovable(current, library):
+        acted_names.add(acted.name)
+        attributions.append(_record(acted, None, False, []))
+        progress.note(f"{acted.name} (z = {acted.z:.1f}): moved by no effect of the library, unexplained")
     for round_number in range(1, max_rounds + 1):
         ranked = sorted((r for r in current.values() if r.name not in acted_names
                          and r.name not in settings.DERIVED and r.z > settings.NOISE_LEVEL),

@@ -133,17 +133,25 @@ def named_effects(result: attribution.LoopResult) -> dict:
     return {a["effect"]: a["magnitude"] for a in result.attributions if a["effect"] != "unexplained"}
 
 
-def verdict(case: BlindCase, result: attribution.LoopResult, untouched: dict) -> dict:
-    """What the loop named on the case beyond the untouched recording, and whether it is the injected effect
-    within ``settings.BLIND_MAGNITUDE_TOLERANCE`` (outside effects: whether it stayed unexplained)."""
-    named = named_effects(result)
-    new = {name: m - untouched.get(name, 0.0) for name, m in named.items()
-           if name not in untouched or abs(m - untouched[name]) > 0.0}
-    unexplained = [a["residual"] for a in result.attributions if a["effect"] == "unexplained"]
+def unexplained(result: attribution.LoopResult) -> list:
+    """The residuals the loop left unexplained."""
+    return [a["residual"] for a in result.attributions if a["effect"] == "unexplained"]
+
+
+def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribution.LoopResult) -> dict:
+    """What the loop named on the case beyond the ``untouched`` recording's result (an effect named there too
+    counts only when its magnitude moved by more than ``settings.BLIND_MAGNITUDE_TOLERANCE`` of the untouched
+    one), and whether it is the injected effect within that tolerance of the expected figure. An effect
+    outside the library is found when the loop names nothing beyond the untouched recording and leaves a
+    residual unexplained that it did not leave unexplained there."""
+    named, before = named_effects(result), named_effects(untouched)
+    new = {name: m - before.get(name, 0.0) for name, m in named.items()
+           if name not in before or abs(m - before[name]) > settings.BLIND_MAGNITUDE_TOLERANCE * abs(before[name])}
+    left = [name for name in unexplained(result) if name not in unexplained(untouched)]
     row = {"case": case.name, "injected": case.magnitude, "unit": case.unit, "expected_effect": "/".join(case.named),
-           "expected_magnitude": case.expected, "named_beyond_untouched": new, "unexplained_residuals": unexplained}
+           "expected_magnitude": case.expected, "named_beyond_untouched": new, "unexplained_beyond_untouched": left}
     if case.named == ("unexplained",):
-        row["found"] = bool(unexplained) and not new
+        row["found"] = bool(left) and not new
         row["found_magnitude"] = math.nan
         return row
     hits = [(name, new[name]) for name in case.named if name in new]

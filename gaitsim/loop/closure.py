@@ -10,7 +10,7 @@ frame turns gravity the wrong way. A proper rotation of the sensor frame changes
 Per stride (from the middle third of one detected stance to the middle third of the next):
 
 - the attitude starts level from the mean specific force over the first middle third (heading 0) and is
-  propagated with the gyro less ``gyro_bias``; the velocity starts at zero;
+  propagated with the gyro less the bias found at rest; the velocity starts at zero;
 - ``velocity`` (m/s): the mean integrated velocity over the next middle third, in the heading frame of the
   start (forward = the sensor's x at the start, left, up);
 - ``tilt`` (deg): the angle between the gravity direction the gyro carried to the next stance and the one the
@@ -56,7 +56,8 @@ def stride_closure(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.
     t : (N,) s.  acc : (N, 3) m/s^2.  gyr : (N, 3) rad/s.
     stances, next_stances : (n, 2) int, sample indices [start, end) of each stride's stance and the next one.
     gravity : m/s^2.
-    gyro_bias : (3,) rad/s, subtracted from the gyro (the rest mean: the same on the recording and its twin).
+    gyro_bias : (3,) or (N, 3) rad/s, subtracted from the gyro (from the rests, found the same way on the
+        recording and its twin: :func:`gaitsim.loop.signature.rest_gyro_bias`).
     """
     velocity, tilt = [], []
     rates = np.asarray(gyr, float) - np.asarray(gyro_bias, float)

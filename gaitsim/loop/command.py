@@ -9,9 +9,10 @@ or a recording folder (or a folder of ``run-NNN`` recordings) with whatever refe
 a recording whose frame is not x toes, y left, z up is refused with the map to use.
 
 Every recording's folder gets ``report.md``, ``attribution.json``, ``twin.toml`` (the fitted twin, which
-``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A recording the loop cannot use is a
-failure: its folder holds a ``report.md`` saying why, the summary lists it, the other recordings go on, and the
-command exits 1. Written atomically: nothing appears at DIR when every recording failed.
+``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A dataset of several recordings also
+gets the held-out prediction (:mod:`gaitsim.loop.transfer`): ``held_out.json`` and a table in the summary. A
+recording the loop cannot use is a failure: its folder holds a ``report.md`` saying why, the summary lists it,
+the other recordings go on, and the command exits 1. Written atomically: nothing appears at DIR when every recording failed.
 """
 
 from __future__ import annotations
@@ -23,10 +24,11 @@ from pathlib import Path
 from nav.files import atomic_output_dir, write_json
 from nav.recording import RecordingError, list_runs, read_recording
 
+from ..experiments.runner import process_pool
 from ..measured import load_dataset
+from ..measured.axes import parse_axis_map
 from ..numbers import shown
-from . import attribution, blind, report, settings
-from .axes import parse_axes
+from . import attribution, blind, report, settings, transfer
 
 DATASETS = ("gaitmap-healthy", "ucr-fgo", "xio-ngimu")
 CHOICES = DATASETS + ("blind", "all")
@@ -46,6 +48,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--distance", type=float, default=None, metavar="M",
                    help="walked distance (m) of a recording folder, compared with the navigated length")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--jobs", type=int, default=1,
+                   help="datasets of 'all' run side by side in this many processes (default 1; results do not "
+                        "depend on it)")
     p.set_defaults(func=run)
 
 
@@ -78,20 +83,21 @@ def _failure_report(title: str, exc: Exception) -> str:
     return f"# Sim-to-real loop: {title}\n\nThe loop could not run ({kind}): {exc}\n"
 
 
-def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[str]]:
-    """Run the loop on every recording of ``dataset``; returns the summary lines and the failures."""
-    lines, failures = [], []
+def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[str], dict]:
+    """Run the loop on every recording of ``dataset``; returns the summary lines, the failures and the results
+    (label -> LoopResult) of the recordings that succeeded."""
+    lines, failures, results = [], [], {}
     try:
         recordings = _recordings(dataset, args.data)
     except (ValueError, OSError) as exc:
-        return [f"| {dataset} | could not be read: {exc} | | |"], [f"{dataset}: {exc}"]
+        return [f"| {dataset} | could not be read: {exc} | | |"], [f"{dataset}: {exc}"], results
     for label, read in recordings:
         started = time.time()
         sub = folder / label
         sub.mkdir(parents=True)
         try:
             result = attribution.run_loop(read(), max_rounds=args.rounds, axis_map=args.axes, distance_m=args.distance,
-                                          log=lambda m, lab=label: print(f"  [{lab}] {m}", flush=True))
+                                          log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True))
             doc = report.write_result(result, sub, f"{dataset} / {label}")
         except Exception as exc:  # noqa: BLE001 -- any failure of one recording is reported, the others go on
             (sub / "report.md").write_text(_failure_report(f"{dataset} / {label}", exc))
@@ -99,21 +105,30 @@ def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[s
             failures.append(f"{dataset} / {label}: {exc}")
             print(f"{dataset} {label}: FAILED: {exc}", flush=True)
             continue
+        results[label] = result
         lines.append(_summary_line(f"[{label}]({label}/report.md)", doc))
         print(f"{dataset} {label}: done in {time.time() - started:.1f} s", flush=True)
-    return lines, failures
+    return lines, failures, results
+
+
+def _run_held_out(dataset: str, folder: Path, results: dict) -> list[str]:
+    """The held-out prediction rows (:mod:`gaitsim.loop.transfer`) of ``dataset`` into ``folder``/held_out.json;
+    returns the README table lines."""
+    rows = transfer.prediction_table(results, log=lambda m: print(f"  [{dataset}] {m}", flush=True))
+    write_json(folder / "held_out.json", rows)
+    return transfer.markdown_rows(dataset, rows)
 
 
 def _run_blind(folder: Path) -> list[str]:
     """The blind table (:mod:`gaitsim.loop.blind`) of every sensor into ``folder``/blind.md and blind.json."""
     rows, summary = [], []
     for sensor in blind.SENSORS:
-        untouched = blind.named_effects(blind.run(sensor, None))
-        print(f"blind {sensor} untouched: {untouched}", flush=True)
+        untouched = blind.run(sensor, None)
+        print(f"blind {sensor} untouched: {blind.named_effects(untouched)}", flush=True)
         found = []
         for case in blind.CASES:
-            row = {"sensor": sensor, "untouched_named": untouched, **blind.verdict(case, blind.run(sensor, case),
-                                                                                   untouched)}
+            row = {"sensor": sensor, "untouched_named": blind.named_effects(untouched),
+                   **blind.verdict(case, blind.run(sensor, case), untouched)}
             rows.append(row)
             found.append(row["found"])
             print(f"blind {sensor} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
@@ -126,8 +141,8 @@ def _run_blind(folder: Path) -> list[str]:
         "|---|---|---|---|---|---|"]
     for r in rows:
         named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
-        if r["unexplained_residuals"]:
-            named += f"; unexplained: {', '.join(r['unexplained_residuals'])}"
+        if r["unexplained_beyond_untouched"]:
+            named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
         lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
                      f"{shown(r['expected_magnitude'])} | {named} | {'yes' if r['found'] else 'no'} |")
     lines += ["", "Named on the untouched recordings (subtracted): " + "; ".join(
@@ -136,12 +151,24 @@ def _run_blind(folder: Path) -> list[str]:
     return [f"| [blind tests](blind.md) | {'; '.join(summary)} | | |"]
 
 
+def _run_target(target: str, folder: Path, args) -> tuple[list[str], list[str], list[str]]:
+    """One target of the command (a dataset, ``blind`` or a recording folder) into ``folder``: its summary lines,
+    failures and held-out table lines."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if target == "blind":
+        return _run_blind(folder), [], []
+    found, failed, results = _run_recordings(target, folder, args)
+    return found, failed, (_run_held_out(target, folder, results) if len(results) > 1 else [])
+
+
 def run(args) -> int:
     """Run the loop as the command line asked; returns the exit code (1 when any recording failed)."""
     if args.rounds < 1:
         raise ValueError(f"--rounds {args.rounds}: must be >= 1")
+    if args.jobs < 1:
+        raise ValueError(f"--jobs {args.jobs}: must be >= 1")
     if args.axes is not None:
-        parse_axes(args.axes)  # a malformed map is refused before anything runs
+        parse_axis_map(args.axes)  # a malformed map is refused before anything runs
     if args.distance is not None and args.dataset in CHOICES:
         raise ValueError(f"--distance applies to a recording folder, not to {args.dataset!r} (its recordings carry "
                          "their own references)")
@@ -149,22 +176,28 @@ def run(args) -> int:
         raise RecordingError(f"loop: {args.dataset!r} is neither a dataset ({', '.join(CHOICES)}) nor a recording "
                              "folder")
     targets = list(DATASETS) + ["blind"] if args.dataset == "all" else [args.dataset]
-    failures, recordings = [], 0
+    failures, recordings, held_out = [], 0, []
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
         lines = ["# Sim-to-real loop results", "", f"Regenerate with `gaitsim loop {args.dataset} --out DIR`.", "",
                  "| recording | residual -> effect (fitted) | navigation metric (measured) | "
                  "predicted-vs-measured discrepancy before -> after |", "|---|---|---|---|"]
-        for target in targets:
-            folder = tmp / target if len(targets) > 1 else tmp
-            folder.mkdir(parents=True, exist_ok=True)
+        folders = [tmp / target if len(targets) > 1 else tmp for target in targets]
+        if args.jobs > 1 and len(targets) > 1:
+            with process_pool(min(args.jobs, len(targets))) as pool:
+                outcomes = list(pool.map(_run_target, targets, folders, [args] * len(targets)))
+        else:
+            outcomes = [_run_target(target, folder, args) for target, folder in zip(targets, folders)]
+        for target, (found, failed, held) in zip(targets, outcomes):
             prefix = f"{target}/" if len(targets) > 1 else ""
-            if target == "blind":
-                found, failed = _run_blind(folder), []
-            else:
-                found, failed = _run_recordings(target, folder, args)
             recordings += len(found)
             failures += failed
+            held_out += held
             lines += [line.replace("](", f"]({prefix}", 1) for line in found]
+        if held_out:
+            lines += ["", "## Held-out prediction", "", transfer.__doc__.strip(), "",
+                      "| dataset | effects of -> applied to | effects (alone: lowers the target's misfit?) | "
+                      "q_signature default -> transferred | better | navigation discrepancy default -> "
+                      "transferred |", "|---|---|---|---|---|---|"] + held_out
         if failures:
             lines += ["", f"**{len(failures)} recording(s) failed:**", ""] + [f"- {f}" for f in failures]
         (tmp / "README.md").write_text("\n".join(lines) + "\n")

@@ -15,11 +15,11 @@ re-run the sensor model on the cached walk).
 | bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
-| accel_scale | [sensor] accel_misalignment = (1 + s) I | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
+| accel_scale | [sensor] accel_misalignment = (1 + s) x the twin's | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
-| gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one diagonal entry 1 + s | % | stride closure, gyro profiles, navigation |
-| accel_scale_x, _y, _z | [sensor] accel_misalignment, one diagonal entry 1 + s | % | stride closure, rest_acc_norm, acc profiles, navigation |
-| g_sensitivity | [sensor] gyro_g_sensitivity = k I | deg/s/(m/s^2) | stride closure tilt, navigation |
+| gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
+| accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
+| g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
 
 The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, time and
@@ -141,10 +141,20 @@ def _sensor(**items) -> dict:
 
 
 def _scaled_axis(matrix, axis: int, percent: float) -> list:
-    """The twin's 3x3 sensor matrix with its ``axis`` diagonal entry set to 1 + ``percent`` / 100."""
+    """The twin's 3x3 sensor matrix with the output of its ``axis`` (that row) scaled by 1 + ``percent`` / 100:
+    a scale error of that axis on top of what the twin already has (an equal scale named before included)."""
     out = np.array(matrix, float)
-    out[axis, axis] = 1.0 + percent / 100.0
+    out[axis] *= 1.0 + percent / 100.0
     return out.tolist()
+
+
+def _g_sensitivity_changes(magnitude: float, ctx: dict) -> dict:
+    """G_g raised by ``magnitude`` (deg/s per m/s^2) on every axis, and the twin's gyro bias lowered by what that
+    adds at rest (``magnitude`` times the rest specific force): the bias was measured on the recording at rest,
+    where its g-sensitivity already acts, so the twin's rest reading must stay the recording's."""
+    g_sensitivity = np.asarray(ctx["gyro_g_sensitivity"]) + np.eye(3) * magnitude
+    bias = np.asarray(ctx["gyro_bias_rad_s"]) - math.radians(magnitude) * np.asarray(ctx["rest_specific_force"])
+    return _sensor(gyro_g_sensitivity=[g_sensitivity.tolist(), "deg/s/(m/s^2)"], gyro_bias=[bias.tolist(), "rad/s"])
 
 
 LIBRARY: tuple[Effect, ...] = (
@@ -185,7 +195,8 @@ LIBRARY: tuple[Effect, ...] = (
     Effect("accel_scale", "accelerometer scale factor error, equal on the three axes",
            "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES + CLOSURE,
            (-5.0, 5.0),
-           lambda m, ctx: _sensor(accel_misalignment=[(np.eye(3) * (1.0 + m / 100.0)).tolist(), "1"]),
+           lambda m, ctx: _sensor(accel_misalignment=[(np.asarray(ctx["accel_misalignment"]) * (1.0 + m / 100.0))
+                                                      .tolist(), "1"]),
            _scale_guess),
     *(Effect(f"{sensor}_scale_{axis}", f"{label} scale factor error of the sensor's {axis} axis alone",
              f"[sensor] {sensor}_misalignment[{i}][{i}]", "%", CLOSURE + profiles + NAV + extra, (-6.0, 6.0),
@@ -193,10 +204,10 @@ LIBRARY: tuple[Effect, ...] = (
       for sensor, label, profiles, extra in (("gyro", "gyro", GYR_PROFILES, ()),
                                              ("accel", "accelerometer", ACC_PROFILES, ("rest_acc_norm",)))
       for i, axis in enumerate("xyz")),
-    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's)",
-           "[sensor] gyro_g_sensitivity", "deg/s/(m/s^2)", ("closure_roll", "closure_pitch") + NAV, (-0.05, 0.05),
-           lambda m, ctx: _sensor(gyro_g_sensitivity=[(np.asarray(ctx["gyro_g_sensitivity"]) + np.eye(3) * m).tolist(),
-                                                      "deg/s/(m/s^2)"])),
+    Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's; the "
+           "twin's gyro bias, found at rest where the g-sensitivity acts too, loses k times the rest specific force)",
+           "[sensor] gyro_g_sensitivity, gyro_bias", "deg/s/(m/s^2)", ("closure_roll", "closure_pitch") + NAV,
+           (-0.05, 0.05), _g_sensitivity_changes),
     Effect("saturation", "accelerometer range limit (clipping)", "[sensor] accel_range", "m/s^2",
            ("acc_peak", "hf40", "hf80", "onset_hf") + ACC_PROFILES, (20.0, 400.0),
            lambda m, ctx: _sensor(accel_range=[m, "m/s^2"]),
@@ -237,6 +248,7 @@ def clipped_runs(acc: np.ndarray) -> int:
 
 def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signature) -> dict:
     """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
+    mean specific force (m/s^2, sensor frame) over the detected stances, the twin's gyro bias (rad/s),
     the twin's current creep, stance rotation, roll rate, IMU site (m, foot frame) and sensor roll/pitch on
     the foot (rad), and the stance rotation (deg/s, foot frame) that closes the core-stance rate residual (the
     twin's, plus the residual turned from the sensor into the foot frame by the twin's mounting misalignment).
@@ -263,7 +275,10 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
             **{key: (np.asarray(twin.sensor[key]) if twin.sensor is not None else np.eye(3)).tolist()
                for key in ("gyro_misalignment", "accel_misalignment")},
             "gyro_g_sensitivity": np.degrees(np.asarray(twin.sensor["gyro_g_sensitivity"])
-                                             if twin.sensor is not None else np.zeros((3, 3))).tolist()}
+                                             if twin.sensor is not None else np.zeros((3, 3))).tolist(),
+            "gyro_bias_rad_s": (np.asarray(twin.sensor["gyro_bias"]) if twin.sensor is not None
+                                else np.zeros(3)).tolist(),
+            "rest_specific_force": rec.acc[measured.stationary].mean(0).tolist()}
 
 
 def applicable(effect: Effect, ctx: dict) -> bool:

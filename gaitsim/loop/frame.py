@@ -13,7 +13,7 @@ alone, whatever the logger did:
    is y, signed so that the largest pitch excursion of each swing (the toes going down after heel off) is
    positive about it (median over swings). x completes the right-handed triad.
 
-The check returns the axis map (:mod:`gaitsim.loop.axes`) that brings the data into the body frame;
+The check returns the axis map (:mod:`gaitsim.measured.axes`) that brings the data into the body frame;
 :func:`require_body_frame` refuses a recording whose map is not the identity and names the ``--axes`` option
 that corrects it. The same tolerance that keeps a tilted mount's gravity on z (the largest component) applies:
 a sensor turned by less than 45 degrees on the foot is a mount, fitted later; beyond that it is a frame.
@@ -28,7 +28,8 @@ import numpy as np
 from nav import detectors
 from nav.recording import Recording, RecordingError
 
-from . import axes, settings
+from ..measured import axes
+from . import settings
 from .closure import stride_closure
 from .strides import stance_intervals
 
@@ -134,11 +135,11 @@ def require_body_frame(rec: Recording, axis_map: str | None = None) -> tuple[Rec
     FrameError
         naming what failed and the ``--axes`` map that brings the recording into the body frame.
     """
-    given = axes.parse_axes(axis_map) if axis_map is not None else np.eye(3)
+    given = axes.parse_axis_map(axis_map) if axis_map is not None else np.eye(3)
     mapped = axes.remapped(rec, given) if axis_map is not None else rec
     check = check_frame(mapped)
     if not check.is_body_frame:
-        advice = axes.format_axes(check.axes @ given)
+        advice = axes.axis_map_text(check.axes @ given)
         after = f" after --axes {axis_map}" if axis_map is not None else ""
         raise FrameError(f"sensor frame{after} is not x toes, y left, z up: {'; '.join(check.findings)}; "
                          f"rerun with --axes {advice}")

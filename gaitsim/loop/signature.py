@@ -245,7 +245,8 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     rest = slice(*stances_all[0])
     scalars["rest_acc_norm"] = _rest_acc_norm(acc[rest])
     scalars.update(_rest_changes(t, acc, gyr, stances_all))
-    closing = stride_closure(t, acc, gyr, stances, following(stances, stances_all), gravity, gyr[rest].mean(0))
+    closing = stride_closure(t, acc, gyr, stances, following(stances, stances_all), gravity,
+                             rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
     for name, column in zip(CLOSURE, np.column_stack([closing.velocity, closing.tilt]).T):
         scalars[name] = mean_se(column)
     curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
@@ -291,10 +292,31 @@ def _rest_acc_norm(rest_acc: np.ndarray) -> Scalar:
     return Scalar(float(np.linalg.norm(rest_acc.mean(0))), float(spread / math.sqrt(len(rest_acc))), norm_samples)
 
 
+def _long_rests(t: np.ndarray, stances: np.ndarray) -> list:
+    """The detected stances [start, end) lasting at least ``settings.QUIET_REST_S``."""
+    return [(a, b) for a, b in stances if t[b - 1] - t[a] >= settings.QUIET_REST_S]
+
+
+def rest_gyro_bias(t: np.ndarray, gyr: np.ndarray, stances: np.ndarray, change: Scalar | None) -> np.ndarray:
+    """(N, 3) rad/s, the gyro bias the stride closure subtracts: the mean rate of the first detected stance (the
+    initial rest). When the bias changed significantly between the first and the last long rest (``change``,
+    the ``rest_gyro_change`` scalar, beyond ``settings.NOISE_LEVEL`` times its standard error) the means of
+    those two rests are interpolated linearly in time between their centres instead (held constant outside):
+    a drifting bias is outside the effect library, and it must not leak into the closure, where it would read
+    as a scale or time error of the sensor. Below that level the last rest only adds its noise."""
+    long = _long_rests(t, stances)
+    if change is None or change.value <= settings.NOISE_LEVEL * change.se:
+        return np.broadcast_to(gyr[slice(*stances[0])].mean(0), gyr.shape)
+    (a0, a1), (b0, b1) = long[0], long[-1]
+    centres = [0.5 * (t[a0] + t[a1 - 1]), 0.5 * (t[b0] + t[b1 - 1])]
+    means = np.array([gyr[a0:a1].mean(0), gyr[b0:b1].mean(0)])
+    return np.column_stack([np.interp(t, centres, means[:, i]) for i in range(3)])
+
+
 def _rest_changes(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> dict:
     """``rest_gyro_change`` (deg/s) and ``rest_acc_change`` (m/s^2) between the first and the last rest of at
     least ``settings.QUIET_REST_S`` (module docstring); empty without two such rests."""
-    long = [(a, b) for a, b in stances if t[b - 1] - t[a] >= settings.QUIET_REST_S]
+    long = _long_rests(t, stances)
     if len(long) < 2:
         return {}
     first, last = slice(*long[0]), slice(*long[-1])

@@ -6,9 +6,9 @@ Files (``gaitmap-healthy/``, MIT, (c) 2020 MaD-Lab Erlangen, from mad-lab-fau/ga
 
 Frames
 ------
-gaitmap's foot sensor frame (FSF) is right-handed with x to the tip of the shoe, y to the left and z up, which is
-the project's body frame: the loader applies the identity (units only) and verifies it on the data with
-:func:`gaitsim.measured.quality.frame_checks`. The Vicon lab frame is z up and right-handed (checked: the
+The IMU data are in gaitmap's foot sensor frame, which is the project's body frame (the equivalence is stated,
+and checked against gaitmap itself, in :mod:`gaitsim.interop.gaitmap`): the loader converts units only and
+verifies the frame on the data with :func:`gaitsim.measured.quality.frame_checks`. The Vicon lab frame is z up and right-handed (checked: the
 IMU's angular rate fits the marker body's rate by a proper rotation with correlation ~0.99); the reference is
 given in it, converted to metres, with the lab's origin.
 

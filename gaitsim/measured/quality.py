@@ -195,8 +195,36 @@ def frame_checks(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray) -> dict:
     }
 
 
+def frame_problems(checks: dict, tolerance: float = 0.05, gravity: float = DEFAULT_GRAVITY) -> list[str]:
+    """Every frame check of :func:`frame_checks` that fails, as a message; the walking checks (pitch axis, toes
+    forward) only when the recording has swings.
+
+    Parameters
+    ----------
+    checks : output of :func:`frame_checks`.
+    tolerance : allowed relative deviation of the still |specific force| from ``gravity`` (a unit error is >> 5 %).
+    gravity : m/s^2.
+    """
+    problems = []
+    norm = checks["still_acc_norm"]
+    if not abs(norm - gravity) <= tolerance * gravity:
+        problems.append(f"still |specific force| is {norm:.3f} m/s^2, expected {gravity} within {tolerance:.0%} "
+                        "(units?)")
+    if not checks["still_acc_mean"][2] > 0.7 * gravity:
+        problems.append(f"gravity is not on +z at rest: mean still specific force {checks['still_acc_mean']} m/s^2")
+    if checks["swings"] == 0:
+        return problems
+    if checks["dominant_gyro_axis"] != 1:
+        problems.append(f"dominant angular-rate axis is {'xyz'[checks['dominant_gyro_axis']]}, expected y (pitch)")
+    if not checks["forward_is_plus_x"]:
+        problems.append(f"median swing pitch excursion {checks['pitch_excursion_deg']:.1f} deg is not positive: "
+                        "x does not point toward the toes")
+    return problems
+
+
 def warn_frame_problems(source: str, checks: dict, tolerance: float = 0.05) -> list[str]:
-    """Warn about every frame check of :func:`frame_checks` that fails; return the messages.
+    """Warn about every frame check of :func:`frame_checks` that fails (:func:`frame_problems`); return the
+    messages.
 
     Parameters
     ----------
@@ -204,17 +232,7 @@ def warn_frame_problems(source: str, checks: dict, tolerance: float = 0.05) -> l
     checks : output of :func:`frame_checks`.
     tolerance : allowed relative deviation of the still |specific force| from 9.81 m/s^2 (a unit error is >> 5 %).
     """
-    problems = []
-    norm = checks["still_acc_norm"]
-    if not abs(norm - DEFAULT_GRAVITY) <= tolerance * DEFAULT_GRAVITY:
-        problems.append(f"still |specific force| is {norm:.3f} m/s^2, expected 9.81 within {tolerance:.0%} (units?)")
-    if not checks["still_acc_mean"][2] > 0.7 * DEFAULT_GRAVITY:
-        problems.append(f"gravity is not on +z at rest: mean still specific force {checks['still_acc_mean']} m/s^2")
-    if checks["dominant_gyro_axis"] != 1:
-        problems.append(f"dominant angular-rate axis is {'xyz'[checks['dominant_gyro_axis']]}, expected y (pitch)")
-    if not checks["forward_is_plus_x"]:
-        problems.append(f"median swing pitch excursion {checks['pitch_excursion_deg']:.1f} deg is not positive: "
-                        "x does not point toward the toes")
+    problems = frame_problems(checks, tolerance)
     for message in problems:
         warn_quality(source, message)
     return problems

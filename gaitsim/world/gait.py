@@ -4,6 +4,13 @@ One foot is simulated. A walk is: standing (foot flat) -> for each stride: heel 
 the toe contact), toe off, swing, initial contact (heel strike), heel rocker (rotation about the heel contact),
 foot flat -> standing at the end. Phase durations are fractions of the gait cycle (one stride of one foot).
 
+A forefoot strike (``forefoot_strike``) lands on the forefoot, toes down, and rotates about the toe contact until
+the heel comes down at foot flat (a toe rocker in place of the heel rocker). Stop-and-go (``stop_every_strides``)
+turns every n-th stance into a stop: the foot stands exactly still for ``stop_duration_s`` more (no micro-motion;
+``StancePlan.walking`` is False for it, as for the standing at both ends). The labelled stance of every gait is
+the foot flat [t_ff, t_ho]: the only phase in which the whole foot, and so an IMU anywhere on it, is at rest.
+Speed-dependent defaults of each gait are in :mod:`gaitsim.world.gaits`.
+
 Angles: foot pitch is the rotation about the foot's left (y) axis, positive when the toes point down; the foot
 pitch at heel strike is therefore negative (toes up) and at toe off positive (heel up). Every parameter is SI
 (angles in rad, rates in rad/s); scenario files give them in degrees (:mod:`gaitsim.scenario` converts).
@@ -29,7 +36,8 @@ class GaitParams:
     stride_length_m : m, nominal heel-contact to heel-contact distance of one foot. Default 1.4 (~0.98 m/s).
     heel_rocker_frac, foot_flat_frac, push_off_frac, swing_frac : fractions of the gait cycle, summing to 1.
         Defaults 0.15 / 0.30 / 0.17 / 0.38: stance 62 % (anchors §7), foot flat from 15 % to 45 %.
-    pitch_heel_strike : rad, foot pitch at initial contact (negative: toes up). Default -20 deg.
+    pitch_heel_strike : rad, foot pitch at initial contact: negative (toes up) for a heel strike, positive (toes
+        down) for a forefoot strike. Default -20 deg.
     pitch_rate_heel_strike : rad/s, pitch rate at initial contact. Default 60 deg/s (forefoot starting down).
     pitch_accel_heel_strike : rad/s^2, pitch acceleration at initial contact. Default 0.
     pitch_toe_off : rad, foot pitch at toe off (heel up). Default 45 deg.
@@ -45,6 +53,9 @@ class GaitParams:
     cycle_sd_frac : relative stride-to-stride standard deviation of the cycle time. Default 0.01.
     pitch_sd : rad, stride-to-stride standard deviation of the heel-strike and toe-off pitch. Default 1 deg.
     stand_start_s, stand_end_s : s, standing (foot flat, still) at the start and end. Default 2.0 each.
+    forefoot_strike : land on the forefoot and rotate about the toe contact down to foot flat. Default False.
+    stop_every_strides : every n-th stance of the walk is a stop (0: none). Default 0.
+    stop_duration_s : s, how much longer a stop stands (still) than a walking stance's foot flat. Default 3.0.
     """
 
     cadence_steps_per_min: float = 84.0
@@ -68,6 +79,9 @@ class GaitParams:
     pitch_sd: float = math.radians(1.0)
     stand_start_s: float = 2.0
     stand_end_s: float = 2.0
+    forefoot_strike: bool = False
+    stop_every_strides: int = 0
+    stop_duration_s: float = 3.0
 
     @property
     def cycle_s(self) -> float:
@@ -214,7 +228,8 @@ class StancePlan:
     pos : (n+1, 2) m, heel contact after heel-strike compression (before stance micro-motion).
     yaw : (n+1,) rad, walking direction of each stance.
     pitch_hs, pitch_to : (n+1,) rad, pitch at the stance's heel strike / toe off.
-    walking : (n+1,) bool, True for full gait stances (micro-motion applies), False for standing.
+    walking : (n+1,) bool, True for full gait stances (micro-motion applies), False for standing (both ends and
+        the stops of stop-and-go).
     t_end : s, end of the recording.
     rate_scale : (n+1, 2) factors of the stance model's (pitch, roll) rates in each stance.
     """
@@ -240,7 +255,8 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
     """Place the stances of ``walk`` along its path with seeded stride-to-stride variability.
 
     The stride count is ``round(path length / stride length)`` (at least 1); the drawn stride lengths are
-    rescaled to end exactly at the path's end.
+    rescaled to end exactly at the path's end. With ``stop_every_strides = m > 0``, stances m, 2m, ... (not the
+    last) are stops: their foot flat lasts ``stop_duration_s`` longer and they do not walk.
     """
     g = walk.gait
     if walk.path is None:
@@ -255,6 +271,11 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
     cycles = g.cycle_s * (1.0 + g.cycle_sd_frac * rng.standard_normal(n))
     pitch_noise = g.pitch_sd * rng.standard_normal((2, n + 1))
 
+    walking = np.ones(n + 1, bool)
+    walking[[0, n]] = False
+    if g.stop_every_strides > 0:
+        walking[g.stop_every_strides:n:g.stop_every_strides] = False
+    stop_s = np.where(walking, 0.0, g.stop_duration_s)
     t_ic = np.zeros(n + 1)
     t_ff = np.zeros(n + 1)
     t_ho = np.zeros(n + 1)
@@ -265,12 +286,10 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
         c = cycles[k - 1]
         t_ic[k] = t_to[k - 1] + g.swing_frac * c
         t_ff[k] = t_ic[k] + g.heel_rocker_frac * c
-        t_ho[k] = t_ff[k] + g.foot_flat_frac * c
+        t_ho[k] = t_ff[k] + g.foot_flat_frac * c + (stop_s[k] if k < n else 0.0)
         t_to[k] = t_ho[k] + g.push_off_frac * (cycles[k] if k < n else c)
     t_end = t_ff[n] + g.stand_end_s
     t_ho[n] = t_to[n] = t_end
-    walking = np.ones(n + 1, bool)
-    walking[[0, n]] = False
     rate_scale = np.maximum(0.0, 1.0 + walk.micro.stance_rate_sd_frac * rng.standard_normal((n + 1, 2)))
     return StancePlan(
         t_ic, t_ff, t_ho, t_to, pos, yaw,

@@ -6,7 +6,8 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 
 - Stance [t_ic, t_to]: the foot rolls on the ground without slipping (:class:`RollingSole`): the heel point is
   a function of the foot's pitch alone, about the heel contact in the heel rocker, over the sole while the foot
-  is near level, about the toe contact in the push-off. On top: heel-strike compression, the contact's creep
+  is near level, about the toe contact in the push-off (and, after a forefoot strike, from the toe contact down
+  to foot flat: the same function of pitch, run backwards). On top: heel-strike compression, the contact's creep
   (:class:`gaitsim.world.gait.MicroMotionParams`), impact ringing, the optional stance roll-over (roll about the
   heel-toe axis, which moves neither contact point) and the optional sustained roll and yaw (the yaw about a
   pivot on the heel-toe line; angles held through the push-off and returned over the swing).
@@ -55,9 +56,10 @@ def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams,
     first to the second heel-rise rate of :func:`heel_rise_rates` with the square of the time since foot flat
     (a cubic pitch, given exactly by its derivatives at both knots); toe off (its drawn pitch,
     ``pitch_rate_toe_off``, ``pitch_accel_toe_off``). Derivatives not named are zero. Standing
-    stances at the start and end are level and still."""
+    stances at the start and end are level and still. The slap turns the foot toward level: toes down after a
+    heel strike, heel down after a forefoot strike."""
     n = plan.n_strides
-    slap_rate = impact.slap_rate
+    slap_rate = -impact.slap_rate if gait.forefoot_strike else impact.slap_rate
     strike = (gait.pitch_rate_heel_strike, gait.pitch_accel_heel_strike)
     toe_off = (gait.pitch_rate_toe_off, gait.pitch_accel_toe_off)
     knots = [(0.0, 0.0, 0.0, 0.0, 0.0)]

@@ -1,10 +1,21 @@
-"""Compiled covariance algebra of the error-state EKF: transition, propagation and the Joseph-form update.
+"""Compiled covariance algebra of the error-state EKF in 3 x 3 blocks: transition, propagation, Joseph update.
 
 Error state (closed loop, reset to zero after every correction), in this order:
 ``dp`` (0:3, m, world), ``dv`` (3:6, m/s, world), ``dtheta`` (6:9, rad, world-frame small rotation with
 ``C_true = (I + [dtheta x]) C_est``), ``db_a`` (9:12, m/s^2), ``db_g`` (12:15, rad/s), ``dG`` (15:24,
 rad/s per m/s^2, row-major gyro g-sensitivity matrix). Each ``d*`` is true minus estimated. The sensor model
 behind it: ``f_meas = f_true + b_a`` and ``w_meas = w_true + b_g + G f_true``.
+
+The transition over h seconds, ``Phi = I + F h`` with ``a = C f`` the world specific force, is the identity but
+for three block rows::
+
+    p:      + h dv
+    v:      - h a x dtheta  - h C db_a
+    theta:  - h C (db_g + dG f)
+
+so applying it to a vector or to the columns of P costs a few dozen flops per column (:func:`transition_rows`),
+not a dense product. Phi is unit block-triangular, so ``Phi^-1`` is the same three rows with the sign flipped,
+applied in the reverse order (each row then uses the already solved blocks below it).
 """
 
 from __future__ import annotations
@@ -12,166 +23,156 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .linalg import cholesky_factor, cholesky_solve
-from .quat import qmatrix
+from .linalg import spd_inverse
 
 
 @njit(cache=True)
-def _build_transition(E, n, C, fhat, h):
-    """Non-identity part E (9 x n) of the transition Phi = I + F h of the error state (first order)."""
-    E[:, :] = 0.0
-    a0 = C[0, 0] * fhat[0] + C[0, 1] * fhat[1] + C[0, 2] * fhat[2]
-    a1 = C[1, 0] * fhat[0] + C[1, 1] * fhat[1] + C[1, 2] * fhat[2]
-    a2 = C[2, 0] * fhat[0] + C[2, 1] * fhat[1] + C[2, 2] * fhat[2]
-    for i in range(3):
-        E[i, 3 + i] = h
-    # dv' = -[a x] dtheta - C db_a
-    E[3, 7] = h * a2
-    E[3, 8] = -h * a1
-    E[4, 6] = -h * a2
-    E[4, 8] = h * a0
-    E[5, 6] = h * a1
-    E[5, 7] = -h * a0
+def _transition_column(X, n, j, h, a, C, f, inverse):
+    """Column j of X <- Phi X[:, j] (or Phi^-1 X[:, j]); only its rows 0:9 change."""
+    p0, p1, p2 = X[0, j], X[1, j], X[2, j]
+    v0, v1, v2 = X[3, j], X[4, j], X[5, j]
+    t0, t1, t2 = X[6, j], X[7, j], X[8, j]
+    s = -h if inverse else h
+    ca0 = ca1 = ca2 = 0.0  # C db_a
+    cg0 = cg1 = cg2 = 0.0  # C (db_g + dG f)
     if n >= 15:
-        for i in range(3):
-            for j in range(3):
-                E[3 + i, 9 + j] = -h * C[i, j]  # velocity <- accelerometer bias
-                E[6 + i, 12 + j] = -h * C[i, j]  # attitude <- gyro bias
-    if n == 24:
-        for i in range(3):
-            for r in range(3):
-                for c in range(3):
-                    E[6 + i, 15 + 3 * r + c] = -h * C[i, r] * fhat[c]  # attitude <- g-sensitivity
+        b0, b1, b2 = X[9, j], X[10, j], X[11, j]
+        g0, g1, g2 = X[12, j], X[13, j], X[14, j]
+        if n == 24:
+            g0 += f[0] * X[15, j] + f[1] * X[16, j] + f[2] * X[17, j]
+            g1 += f[0] * X[18, j] + f[1] * X[19, j] + f[2] * X[20, j]
+            g2 += f[0] * X[21, j] + f[1] * X[22, j] + f[2] * X[23, j]
+        ca0 = C[0, 0] * b0 + C[0, 1] * b1 + C[0, 2] * b2
+        ca1 = C[1, 0] * b0 + C[1, 1] * b1 + C[1, 2] * b2
+        ca2 = C[2, 0] * b0 + C[2, 1] * b1 + C[2, 2] * b2
+        cg0 = C[0, 0] * g0 + C[0, 1] * g1 + C[0, 2] * g2
+        cg1 = C[1, 0] * g0 + C[1, 1] * g1 + C[1, 2] * g2
+        cg2 = C[2, 0] * g0 + C[2, 1] * g1 + C[2, 2] * g2
+    if inverse:  # solve by back substitution: attitude, then velocity with it, then position with that
+        t0, t1, t2 = t0 - s * cg0, t1 - s * cg1, t2 - s * cg2
+    n0 = v0 - s * ((a[1] * t2 - a[2] * t1) + ca0)
+    n1 = v1 - s * ((a[2] * t0 - a[0] * t2) + ca1)
+    n2 = v2 - s * ((a[0] * t1 - a[1] * t0) + ca2)
+    if inverse:
+        X[0, j], X[1, j], X[2, j] = p0 + s * n0, p1 + s * n1, p2 + s * n2
+    else:
+        X[0, j], X[1, j], X[2, j] = p0 + s * v0, p1 + s * v1, p2 + s * v2
+        t0, t1, t2 = t0 - s * cg0, t1 - s * cg1, t2 - s * cg2
+    X[3, j], X[4, j], X[5, j] = n0, n1, n2
+    X[6, j], X[7, j], X[8, j] = t0, t1, t2
 
 
 @njit(cache=True)
-def _block_range(block, n):
-    """Column range [lo, hi) of the non-zero part of E's row block (0: position, 1: velocity, 2: attitude)."""
-    if block == 0:
-        return 3, 6
-    if block == 1:
-        return 6, (12 if n >= 15 else 9)
-    return (12, n) if n >= 15 else (12, 12)
+def transition_rows(X, n, ncols, h, a, C, f, inverse):
+    """X <- Phi X (or Phi^-1 X when ``inverse``) for the first ``ncols`` columns of X (n rows).
 
-
-@njit(cache=True)
-def _propagate_with(P, n, E, B, qdiag):
-    """P <- (I + E) P (I + E)^T + diag(qdiag), exploiting that only E's first 9 rows are non-zero."""
-    for i in range(9):
-        lo, hi = _block_range(i // 3, n)
-        for j in range(n):
-            s = 0.0
-            for m in range(lo, hi):
-                s += E[i, m] * P[m, j]
-            B[i, j] = s  # B = E P
-    # E P E^T (9 x 9) before P changes
-    for i in range(9):
-        lo, hi = _block_range(i // 3, n)
-        for j in range(i, 9):
-            s = 0.0
-            for m in range(lo, hi):
-                s += E[i, m] * B[j, m]
-            P[i, j] += s
-            if j != i:
-                P[j, i] = P[i, j]
-    for i in range(n):
-        for j in range(i, n):
-            add = 0.0
-            if i < 9:
-                add += B[i, j]
-            if j < 9:
-                add += B[j, i]
-            if i == j:
-                add += qdiag[i]
-            val = P[i, j] + add
-            P[i, j] = val
-            P[j, i] = val
-
-
-@njit(cache=True)
-def propagation_buffers(n):
-    """Work buffers of :func:`propagate`: C (3, 3), E (9, n), B (9, n), qdiag (n,)."""
-    return np.empty((3, 3)), np.zeros((9, n)), np.empty((9, n)), np.empty(n)
-
-
-@njit(cache=True)
-def propagate(P, n, q, fhat, h, rw, buffers):
-    """Propagate the covariance P (n x n) in place over one interval of h seconds.
-
-    ``q`` (4,) is the nominal attitude and ``fhat`` (3,) the corrected specific force (m/s^2) at the start of the
-    interval; ``rw`` (n,) the continuous driving-noise power per state. Leaves the transition's non-identity
-    part E (9 x n) in ``buffers[1]`` (from :func:`propagation_buffers`).
+    ``h`` s, ``a = C f`` (3,) world specific force, ``C`` (3, 3) body->world, ``f`` (3,) corrected specific force
+    in the body frame, all at the start of the interval.
     """
-    C, E, B, qdiag = buffers
-    qmatrix(q, C)
-    _build_transition(E, n, C, fhat, h)
-    for i in range(n):
-        qdiag[i] = rw[i] * h
-    _propagate_with(P, n, E, B, qdiag)
+    for j in range(ncols):
+        _transition_column(X, n, j, h, a, C, f, inverse)
 
 
 @njit(cache=True)
-def _sparse_product(h_col, h_val, h_cnt, m, X, n, out):
-    """out (m x n) = H X for the sparse m-row H of :func:`joseph_update` and X with n columns."""
-    for r in range(m):
-        for j in range(n):
-            s = 0.0
-            for e in range(h_cnt[r]):
-                s += h_val[r, e] * X[h_col[r, e], j]
-            out[r, j] = s
+def transition_transposed(lam, n, h, a, C, f):
+    """lam <- Phi^T lam (n,), in place (the adjoint of :func:`transition_rows`)."""
+    v0, v1, v2 = lam[3], lam[4], lam[5]
+    t0, t1, t2 = lam[6], lam[7], lam[8]
+    lam[3] += h * lam[0]
+    lam[4] += h * lam[1]
+    lam[5] += h * lam[2]
+    # (-h [a x])^T = h [a x]
+    lam[6] += h * (a[1] * v2 - a[2] * v1)
+    lam[7] += h * (a[2] * v0 - a[0] * v2)
+    lam[8] += h * (a[0] * v1 - a[1] * v0)
+    if n >= 15:
+        for c in range(3):
+            lam[9 + c] -= h * (C[0, c] * v0 + C[1, c] * v1 + C[2, c] * v2)
+            ct = h * (C[0, c] * t0 + C[1, c] * t1 + C[2, c] * t2)  # h (C^T lam_theta)_c
+            lam[12 + c] -= ct
+            if n == 24:
+                for e in range(3):
+                    lam[15 + 3 * c + e] -= ct * f[e]
 
 
 @njit(cache=True)
-def update_buffers(n, m):
-    """Work buffers of :func:`joseph_update` for up to m measurements."""
-    return (np.empty((m, n)), np.empty((m, m)), np.empty((m, m)), np.empty((n, m)), np.empty((n, n)),
-            np.empty((m, n)), np.empty(m), np.empty(m))
+def propagate(P, n, h, a, C, f, noise_power):
+    """P <- Phi P Phi^T + Q in place over one interval of h seconds; Q = diag(noise_power) h.
 
-
-@njit(cache=True)
-def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, w):
-    """Kalman update of P (n x n) with measurement z = H dx + noise (variance r_var, m values), Joseph form.
-
-    H is given sparsely: row r has ``h_cnt[r]`` non-zeros ``h_val[r, :]`` in columns ``h_col[r, :]``. Adds the
-    state correction to ``dx``; ``w`` holds the work buffers of :func:`update_buffers`. Returns False if S is not
-    positive definite.
+    Phi acts on the columns of P (block rows 0:9 change), then on the rows of the result: by symmetry only
+    the 9 x 9 block of position, velocity and attitude needs it, and the block rows 9:n of the result are the
+    transpose of the block columns already computed.
     """
-    HP, S, L, K, A, HAt, col, sol = w
-    _sparse_product(h_col, h_val, h_cnt, m, P, n, HP)
+    transition_rows(P, n, n, h, a, C, f, False)  # P <- Phi P: rows 0:9 change
+    for i in range(9):  # (Phi P)^T into the first 9 columns (rows 9: of Phi P are P's, unchanged)
+        for j in range(i + 1, 9):
+            P[i, j], P[j, i] = P[j, i], P[i, j]
+        for j in range(9, n):
+            P[j, i] = P[i, j]
+    transition_rows(P, n, 9, h, a, C, f, False)  # columns 0:9 <- Phi (Phi P)^T = (Phi P Phi^T)[:, 0:9]
+    for i in range(9):
+        for j in range(i + 1, 9):
+            P[i, j] = P[j, i]
+    for i in range(n):
+        P[i, i] += noise_power[i] * h
+
+
+@njit(cache=True)
+def update_buffers(n):
+    """Work buffers of :func:`joseph_update`: U, V, W (n, 3), HU, S^-1 (3, 3)."""
+    return np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)), np.empty((3, 3))
+
+
+@njit(cache=True)
+def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, w):
+    """Kalman update of P (n x n) in place with z = H dx + noise (variances r_var, m <= 3 values), Joseph form.
+
+    H is sparse: row r has ``h_cnt[r]`` non-zeros ``h_val[r, :]`` in columns ``h_col[r, :]``. With
+    ``U = P H^T``, ``S = H U + R``, ``K = U S^-1``, ``V = U - K H U`` and ``W = U - K R`` the Joseph form
+    ``(I - K H) P (I - K H)^T + K R K^T`` is ``P - K W^T - V K^T``; its upper triangle is computed and mirrored.
+    Rows m..2 of every 3-wide buffer are zero, so the inner loops have a fixed length of 3.
+    Writes the correction ``K z`` into ``dx``, the gain into ``K`` (n, 3) and ``S^-1 z`` into ``s`` (3,);
+    ``w`` holds :func:`update_buffers`. Returns False (P untouched) if S is not positive definite.
+    """
+    U, V, W, HU, S_inv = w
+    U[:, :] = 0.0
     for r in range(m):
-        for q in range(m):
-            s = 0.0
-            for e in range(h_cnt[q]):
-                s += HP[r, h_col[q, e]] * h_val[q, e]
-            S[r, q] = s + (r_var[r] if r == q else 0.0)
-    if not cholesky_factor(S, m, L):
+        for e in range(h_cnt[r]):
+            c, value = h_col[r, e], h_val[r, e]
+            for i in range(n):
+                U[i, r] += P[i, c] * value
+    HU[:, :] = 0.0
+    for r in range(m):
+        for e in range(h_cnt[r]):
+            c, value = h_col[r, e], h_val[r, e]
+            for q in range(3):
+                HU[r, q] += value * U[c, q]
+    if not spd_inverse(HU, r_var, m, S_inv):
         return False
-    # K = P H^T S^-1, one row at a time: K[j, :] = S^-1 HP[:, j]
-    for j in range(n):
-        for r in range(m):
-            col[r] = HP[r, j]
-        cholesky_solve(L, m, col, sol)
-        for r in range(m):
-            K[j, r] = sol[r]
-    for j in range(n):
-        s = 0.0
-        for r in range(m):
-            s += K[j, r] * z[r]
-        dx[j] += s
-    # A = (I - K H) P
+    for r in range(3):
+        acc = 0.0
+        for q in range(m):
+            acc += S_inv[r, q] * z[q]
+        s[r] = acc
     for i in range(n):
-        for j in range(n):
-            s = P[i, j]
-            for r in range(m):
-                s -= K[i, r] * HP[r, j]
-            A[i, j] = s
-    _sparse_product(h_col, h_val, h_cnt, m, A.T, n, HAt)  # (A H^T)^T
-    # P = A (I - K H)^T + K R K^T: symmetric in exact arithmetic; the upper triangle is computed and mirrored
+        u0, u1, u2 = U[i, 0], U[i, 1], U[i, 2]
+        k0 = u0 * S_inv[0, 0] + u1 * S_inv[1, 0] + u2 * S_inv[2, 0]
+        k1 = u0 * S_inv[0, 1] + u1 * S_inv[1, 1] + u2 * S_inv[2, 1]
+        k2 = u0 * S_inv[0, 2] + u1 * S_inv[1, 2] + u2 * S_inv[2, 2]
+        K[i, 0], K[i, 1], K[i, 2] = k0, k1, k2
+        dx[i] = k0 * (z[0] if m > 0 else 0.0) + k1 * (z[1] if m > 1 else 0.0) + k2 * (z[2] if m > 2 else 0.0)
+        V[i, 0] = u0 - (k0 * HU[0, 0] + k1 * HU[1, 0] + k2 * HU[2, 0])
+        V[i, 1] = u1 - (k0 * HU[0, 1] + k1 * HU[1, 1] + k2 * HU[2, 1])
+        V[i, 2] = u2 - (k0 * HU[0, 2] + k1 * HU[1, 2] + k2 * HU[2, 2])
+        W[i, 0] = u0 - k0 * (r_var[0] if m > 0 else 0.0)
+        W[i, 1] = u1 - k1 * (r_var[1] if m > 1 else 0.0)
+        W[i, 2] = u2 - k2 * (r_var[2] if m > 2 else 0.0)
     for i in range(n):
+        k0, k1, k2 = K[i, 0], K[i, 1], K[i, 2]
+        e0, e1, e2 = V[i, 0], V[i, 1], V[i, 2]
         for j in range(i, n):
-            s = A[i, j]
-            for r in range(m):
-                s += K[i, r] * r_var[r] * K[j, r] - HAt[r, i] * K[j, r]
-            P[i, j] = s
-            P[j, i] = s
+            value = P[i, j] - (k0 * W[j, 0] + e0 * K[j, 0] + k1 * W[j, 1] + e1 * K[j, 1]
+                               + k2 * W[j, 2] + e2 * K[j, 2])
+            P[i, j] = value
+            P[j, i] = value
     return True

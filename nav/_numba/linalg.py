@@ -1,9 +1,10 @@
-"""Compiled Cholesky factor and solve for the small symmetric positive definite matrices of the filter."""
+"""Compiled Cholesky factor, solve and inverse for the small symmetric positive definite matrices of the filter."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -37,3 +38,31 @@ def cholesky_solve(L, m, b, out):
         for k in range(i + 1, m):
             s -= L[k, i] * out[k]
         out[i] = s / L[i, i]
+
+
+@njit(cache=True)
+def spd_inverse(A, diag, m, out):
+    """out (3, 3) = (A + diag(diag))^-1 for the leading m x m block (m <= 3), zero elsewhere, from its Cholesky
+    factor; returns False if that block is not positive definite."""
+    S = np.empty((3, 3))
+    L = np.zeros((3, 3))
+    for i in range(m):
+        for j in range(m):
+            S[i, j] = A[i, j] + (diag[i] if i == j else 0.0)
+    if not cholesky_factor(S, m, L):
+        return False
+    e = np.empty(3)
+    col = np.empty(3)
+    out[:, :] = 0.0
+    for c in range(m):
+        for i in range(m):
+            e[i] = 1.0 if i == c else 0.0
+        cholesky_solve(L, m, e, col)
+        for i in range(m):
+            out[i, c] = col[i]
+    for i in range(m):  # exactly symmetric
+        for j in range(i + 1, m):
+            value = 0.5 * (out[i, j] + out[j, i])
+            out[i, j] = value
+            out[j, i] = value
+    return True

@@ -11,7 +11,7 @@ import math
 from numba import njit
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def qmul(a0, a1, a2, a3, b0, b1, b2, b3):
     """Hamilton product ``a ⊗ b`` as a 4-tuple (nav.quaternion.multiply)."""
     return (
@@ -22,7 +22,7 @@ def qmul(a0, a1, a2, a3, b0, b1, b2, b3):
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def qrot(q0, q1, q2, q3, v0, v1, v2):
     """Rotate v by the rotation of q (nav.quaternion.rotate); q need not be unit (divides by |q|^2)."""
     nn = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
@@ -35,7 +35,7 @@ def qrot(q0, q1, q2, q3, v0, v1, v2):
     return r0 / nn, r1 / nn, r2 / nn
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def qexp(p0, p1, p2):
     """Unit quaternion of the rotation vector p in rad (nav.quaternion.from_rotvec)."""
     a = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
@@ -61,7 +61,7 @@ def qmatrix(q, C):
     C[2, 2] = 1 - 2 * (x * x + y * y)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def qnormalised(q0, q1, q2, q3):
     """q / |q| as a 4-tuple."""
     norm = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)

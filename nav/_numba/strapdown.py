@@ -75,12 +75,48 @@ def apply_increment(q, v, p, dq, du, ds, h, gravity):
 
 
 @njit(cache=True)
-def interval_increments(mode, k, t, u_acc, u_gyr, m_acc, m_gyr, ba, bg, G, dq, du, ds, fhat, wk):
+def mid_sample_weights(t, k, weights):
+    """Cubic Lagrange weights (4,) of the value at the middle of [t_k, t_k+1]; returns the first sample index.
+
+    The stencil is samples k-1..k+2, shifted inward at both ends of the recording (a quadratic or linear
+    stencil, padded with zero weights, when it has fewer than 4 samples): nav.strapdown.mid_samples, whose
+    weights are computed in the same order.
+    """
+    n = t.shape[0]
+    order = min(4, n)
+    first = min(max(k - 1 if order == 4 else k, 0), n - order)
+    tm = 0.5 * (t[k] + t[k + 1])
+    for j in range(4):
+        weights[j] = 0.0
+    for j in range(order):
+        w = 1.0
+        for m in range(order):
+            if m != j:
+                w *= (tm - t[first + m]) / (t[first + j] - t[first + m])
+        weights[j] = w
+    return first
+
+
+@njit(cache=True)
+def mid_samples_into(t, x, out):
+    """out (N, c): the values of x (N, c) at the interval midpoints (last row x[-1]), as nav.strapdown.mid_samples."""
+    n = t.shape[0]
+    weights = np.empty(4)
+    out[n - 1] = x[n - 1]
+    for k in range(n - 1):
+        first = mid_sample_weights(t, k, weights)
+        for c in range(x.shape[1]):
+            out[k, c] = (weights[0] * x[first, c] + weights[1] * x[min(first + 1, n - 1), c]
+                         + weights[2] * x[min(first + 2, n - 1), c] + weights[3] * x[min(first + 3, n - 1), c])
+
+
+@njit(cache=True)
+def interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, wk):
     """Bias-corrected body increments over [t_k, t_k+1]; returns h = t_k+1 - t_k (s).
 
-    ``u_acc``, ``u_gyr`` are the samples (or increments), ``m_acc``, ``m_gyr`` the mid-interval samples,
-    ``ba``, ``bg``, ``G`` the bias and g-sensitivity estimates. Writes ``dq``, ``du``, ``ds`` and the corrected
-    specific force at t_k into ``fhat``; ``wk`` is a (6, 3) work buffer.
+    ``u_acc``, ``u_gyr`` are the samples (or increments); the mid-interval samples are interpolated here
+    (:func:`mid_sample_weights`). ``ba``, ``bg``, ``G`` are the bias and g-sensitivity estimates. Writes
+    ``dq``, ``du``, ``ds`` and the corrected specific force at t_k into ``fhat``; ``wk`` is a (7, 4) work buffer.
     """
     h = t[k + 1] - t[k]
     if mode == MODE_INCREMENTS:
@@ -95,14 +131,20 @@ def interval_increments(mode, k, t, u_acc, u_gyr, m_acc, m_gyr, ba, bg, G, dq, d
         for i in range(3):
             ds[i] = 0.5 * h * du[i]  # trapezoid position increment
     else:
-        f0, fm, f1, w0, wm, w1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
+        f0, fm, f1, w0, wm, w1, weights = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6]
+        first = mid_sample_weights(t, k, weights)
+        n = t.shape[0]
+        j1, j2, j3 = min(first + 1, n - 1), min(first + 2, n - 1), min(first + 3, n - 1)
         for i in range(3):
             f0[i] = u_acc[k, i] - ba[i]
-            fm[i] = m_acc[k, i] - ba[i]
+            fm[i] = (weights[0] * u_acc[first, i] + weights[1] * u_acc[j1, i] + weights[2] * u_acc[j2, i]
+                     + weights[3] * u_acc[j3, i]) - ba[i]
             f1[i] = u_acc[k + 1, i] - ba[i]
+            wm[i] = (weights[0] * u_gyr[first, i] + weights[1] * u_gyr[j1, i] + weights[2] * u_gyr[j2, i]
+                     + weights[3] * u_gyr[j3, i])
         for i in range(3):
             w0[i] = u_gyr[k, i] - bg[i] - (G[3 * i] * f0[0] + G[3 * i + 1] * f0[1] + G[3 * i + 2] * f0[2])
-            wm[i] = m_gyr[k, i] - bg[i] - (G[3 * i] * fm[0] + G[3 * i + 1] * fm[1] + G[3 * i + 2] * fm[2])
+            wm[i] = wm[i] - bg[i] - (G[3 * i] * fm[0] + G[3 * i + 1] * fm[1] + G[3 * i + 2] * fm[2])
             w1[i] = u_gyr[k + 1, i] - bg[i] - (G[3 * i] * f1[0] + G[3 * i + 1] * f1[1] + G[3 * i + 2] * f1[2])
             fhat[i] = f0[i]
         rk4_increment(h, w0, wm, w1, f0, fm, f1, dq, du, ds)
@@ -111,12 +153,12 @@ def interval_increments(mode, k, t, u_acc, u_gyr, m_acc, m_gyr, ba, bg, G, dq, d
 
 @njit(cache=True)
 def increment_buffers():
-    """Work buffers of :func:`interval_increments`: dq (4), du (3), ds (3), fhat (3), wk (6, 3)."""
-    return np.empty(4), np.empty(3), np.empty(3), np.empty(3), np.empty((6, 3))
+    """Work buffers of :func:`interval_increments`: dq (4), du (3), ds (3), fhat (3), wk (7, 4)."""
+    return np.empty(4), np.empty(3), np.empty(3), np.empty(3), np.empty((7, 4))
 
 
 @njit(cache=True)
-def strapdown_run(mode, t, u_acc, u_gyr, m_acc, m_gyr, i0, q0, v0, p0, gravity, quat, vel, pos):
+def strapdown_run(mode, t, u_acc, u_gyr, i0, q0, v0, p0, gravity, quat, vel, pos):
     """Unaided mechanisation from sample i0; fills quat (N,4), vel (N,3), pos (N,3) from i0 on."""
     n_samples = t.shape[0]
     q = q0.copy()
@@ -131,5 +173,5 @@ def strapdown_run(mode, t, u_acc, u_gyr, m_acc, m_gyr, i0, q0, v0, p0, gravity, 
         pos[k] = p
         if k == n_samples - 1:
             break
-        h = interval_increments(mode, k, t, u_acc, u_gyr, m_acc, m_gyr, zero3, zero3, zero9, dq, du, ds, fhat, wk)
+        h = interval_increments(mode, k, t, u_acc, u_gyr, zero3, zero3, zero9, dq, du, ds, fhat, wk)
         apply_increment(q, v, p, dq, du, ds, h, gravity)

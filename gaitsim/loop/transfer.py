@@ -1,0 +1,104 @@
+"""Held-out prediction: do the effects fitted on one recording predict another recording of the same dataset?
+
+For every ordered pair (source, target) of recordings of one dataset (same sensor model and subject), the
+target's default twin (its own gait, path, mount and sensor noise fit, no effect added) is compared with the
+same twin given the source's accepted effects at the source's fitted magnitudes. What each effect derives from
+the recording it is applied to stays the target's: the mount's roll and pitch, the ringing frequency and the
+direction of a stance rotation (a left and a right foot rotate mirrored), so only the magnitudes travel.
+
+Both twins are scored against the target recording with the target's comparison noise
+(:func:`gaitsim.loop.attribution.comparison_noise`):
+
+- ``q_signature``: sum of z^2 over the signature residuals (navigation and ``settings.DERIVED`` left out), the
+  misfit the loop minimises;
+- ``nav_discrepancy``: ``|twin - recording|`` of each navigation metric the target's reference allows.
+
+The transferred twin predicts better when its ``q_signature`` is lower. Each source effect is also added alone
+to the target's default twin: an effect that does not lower ``q_signature`` there does not transfer and is
+marked so.
+"""
+
+from __future__ import annotations
+
+import math
+
+from . import attribution as att
+from . import effects as fx
+from . import settings
+from . import twin as tw
+
+
+def q_signature(res: dict) -> float:
+    """Sum of z^2 over the signature residuals of ``res`` (name -> Residual) with a finite z."""
+    return float(sum(r.z ** 2 for name, r in res.items()
+                     if not name.startswith("nav_") and name not in settings.DERIVED and math.isfinite(r.z)))
+
+
+def nav_discrepancy(res: dict) -> dict:
+    """Navigation metric -> |twin - recording| (the metric's unit)."""
+    return {name: abs(r.value) for name, r in res.items() if name.startswith("nav_")}
+
+
+def accepted_effects(result: att.LoopResult) -> list[tuple[str, float]]:
+    """(effect name, fitted magnitude) of every effect the loop added to ``result``'s twin, in order."""
+    return [(a["effect"], a["magnitude"]) for a in result.attributions if a["effect"] != "unexplained"]
+
+
+def score(target: att.LoopResult, twin: tw.Twin, simulate: tw.TwinSimulator) -> dict:
+    side = att.simulate_side(simulate, twin, target.measured, True)
+    res = att.compare(target.measured, side, target.noise)
+    return {"q_signature": q_signature(res), "nav_discrepancy": nav_discrepancy(res)}
+
+
+def with_effects(target: att.LoopResult, effects: list[tuple[str, float]],
+                 simulate: tw.TwinSimulator) -> tw.Twin:
+    """The target's default twin with ``effects`` added in order, each in the context of the twin so far."""
+    twin = target.twin_before
+    for name, magnitude in effects:
+        scenario_side = att.simulate_side(simulate, twin, target.measured, False)
+        ctx = fx.context(target.measured.recording, twin.scenario, target.measured.signature, scenario_side.signature)
+        twin = tw.match_noise(twin.with_changes(fx.BY_NAME[name].changes(magnitude, ctx)), simulate)
+    return twin
+
+
+def predict(source_label: str, source: att.LoopResult, target_label: str, target: att.LoopResult,
+            log=lambda message: None) -> dict:
+    """The held-out row of (source, target) (module docstring)."""
+    simulate = tw.TwinSimulator()
+    effects = accepted_effects(source)
+    default = score(target, target.twin_before, simulate)
+    row = {"source": source_label, "target": target_label, "effects": [name for name, _ in effects],
+           "default": default}
+    if not effects:
+        row.update(transferred=default, better=False, per_effect={})
+        return row
+    row["transferred"] = score(target, with_effects(target, effects, simulate), simulate)
+    row["better"] = row["transferred"]["q_signature"] < default["q_signature"]
+    row["per_effect"] = {}
+    for name, magnitude in effects:
+        alone = score(target, with_effects(target, [(name, magnitude)], simulate), simulate)
+        row["per_effect"][name] = {"magnitude": magnitude, "unit": fx.BY_NAME[name].unit,
+                                   "q_signature": alone["q_signature"],
+                                   "transfers": alone["q_signature"] < default["q_signature"]}
+        log(f"held-out {source_label} -> {target_label}: {name} alone q {alone['q_signature']:.1f} "
+            f"(default {default['q_signature']:.1f})")
+    return row
+
+
+def prediction_table(results: dict, log=lambda message: None) -> list[dict]:
+    """The held-out rows of every ordered pair of ``results`` (label -> LoopResult) of one dataset."""
+    return [predict(a, results[a], b, results[b], log) for a in results for b in results if a != b]
+
+
+def markdown_rows(dataset: str, rows: list[dict]) -> list[str]:
+    """Lines of the held-out table (one per pair) for the results README."""
+    out = []
+    for r in rows:
+        nav_d, nav_t = r["default"]["nav_discrepancy"], r["transferred"]["nav_discrepancy"]
+        nav = ", ".join(f"{k}: {nav_d[k]:.4g} -> {nav_t.get(k, math.nan):.4g}" for k in nav_d) or "-"
+        effects = ", ".join(f"{name}{'' if e['transfers'] else ' (does not transfer)'}"
+                            for name, e in r["per_effect"].items()) or "none named"
+        out.append(f"| {dataset} | {r['source']} -> {r['target']} | {effects} | "
+                   f"{r['default']['q_signature']:.1f} -> {r['transferred']['q_signature']:.1f} | "
+                   f"{'yes' if r['better'] else 'no'} | {nav} |")
+    return out

@@ -1,0 +1,143 @@
+"""Gait kinds and their speed-dependent defaults: walking from 60 to 130 steps/min, running from 150 to 180 steps/min
+with a rearfoot or a forefoot strike.
+
+A scenario chooses a kind with ``[gait] kind`` (:mod:`gaitsim.scenario`); the kind's defaults follow from the
+cadence and every key the file writes overrides them. Kind ``"custom"`` (the default) keeps the fixed defaults of
+:class:`gaitsim.world.gait.GaitParams`, :class:`~gaitsim.world.gait.ImpactParams` and
+:class:`~gaitsim.world.gait.MicroMotionParams` (the seed paper's 84 steps/min walk), so existing scenarios do not
+change. Stop-and-go is not a kind: it is a property of any walk (``stop_every_strides``, ``stop_duration_s``).
+
+The defaults are TOML-shaped tables (scenario keys in their units), so a preset reads like a scenario file.
+
+Walking (``"walk"``), c in steps/min, anchored at the seed walk (84 steps/min, 1.4 m strides, 62 % stance,
+-20 / +45 deg at heel strike / toe off: :class:`~gaitsim.world.gait.GaitParams`):
+
+- step length 0.70 + 0.0035 (c - 84) m: 0.62 m (0.62 m/s) at 60 and 0.86 m (1.87 m/s) at 130 steps/min, the
+  usual span from slow to fast walking (Perry & Burnfield, Gait Analysis, 2nd ed., ch. 2: free walking
+  ~1.37 m/s at ~113 steps/min, slow walking below 0.8 m/s; the step length grows less than in proportion to the
+  cadence, so the walk ratio falls from 0.0103 to 0.0066 m min/step);
+- stance 62 - 0.11 (c - 84) % of the cycle: 64.6 % at 60 and 56.9 % at 130 steps/min (stance shortens with speed:
+  Hebenstreit et al., Human Movement Science 43:118-124, 2015, about 65 % slow to 59 % fast); heel rocker, foot
+  flat and push-off keep their seed shares of the stance (15 : 30 : 17);
+- pitch at heel strike -(20 + 0.12 (c - 84)) deg (-22.3 deg at 103: the recordings' twins give -22 to -25) and
+  at toe off 45 + 0.67 (c - 84) deg, with the pitch reversal after toe off of the recordings' twins (see
+  ``WALK_TOE_OFF_*``); the shared recordings (UCR's slow shuffle aside) cover 97-108 steps/min, the slopes
+  carry the fit to the ends of the range;
+- the pitch rates at heel strike and toe off, and the forefoot slap rate, scale with the cadence (a faster cycle
+  turns the same angles faster); the heel's touchdown velocity scales with the walking speed.
+
+Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
+
+- step length 1.2 m (3.0-3.6 m/s over the range; recreational runners at 154-169 steps/min);
+- duty factor (stance share of the cycle) 37 - 0.2 (c - 165) %: 40 % at 150 and 34 % at 180 steps/min, a
+  flight phase throughout (published measurements of recreational runners gathered for issue 17: contact
+  271-284 ms, duty factor 35-39 % at 154-169 steps/min);
+- rearfoot strike: heel first at -15 deg (foot strike angle > 8 deg for a rearfoot strike: Altman & Davis, Gait
+  & Posture 35:298-300, 2012), a short heel rocker; forefoot strike: toes first at +8 deg, rotation about the
+  toe contact until the heel comes down (Lieberman et al., Nature 463:531-535, 2010: forefoot strikers land on
+  the ball of the foot, then the heel lowers);
+- toe off at 70 deg; the toe-off rate (1000 deg/s), its reversal (-25000 deg/s^2), the touchdown velocity
+  (0.4 m/s forward, 0.8 m/s down, stopped in 15 ms) and the rocker rate at contact (200 deg/s toward level) are
+  set so that the simulated peaks reach the published ones below (no measured running recording to fit);
+  swing height 0.15 m; the stance micro-motion's ramps and pulses shortened to fit a ~0.06 s foot flat.
+
+Measured foot-IMU peaks the kinds are checked against (``PUBLISHED_PEAKS``; a test asserts them from the
+simulated truth within 20 %): walking at the seed pace 600-1000 deg/s and 5-15 g (anchors §7: the shared
+recordings and the seed paper's VN-200 walk); running about 1500 deg/s and 15 g at the foot (issue 17; IMUs
+with a 16 g / 2000 deg/s range saturate in running: Potter et al., Sensors 19(11):2601, 2019).
+"""
+
+from __future__ import annotations
+
+import math
+
+KINDS = ("custom", "walk", "run-rearfoot", "run-forefoot")
+CADENCE_SPAN = {"walk": (60.0, 130.0), "run-rearfoot": (150.0, 180.0), "run-forefoot": (150.0, 180.0)}  # steps/min
+DEFAULT_CADENCE = {"walk": 84.0, "run-rearfoot": 165.0, "run-forefoot": 165.0}  # steps/min
+
+SEED_CADENCE = 84.0  # steps/min, the walk GaitParams' fixed defaults describe
+SEED_STEP_M = 0.70
+WALK_STEP_SLOPE = 0.0035  # m per step/min
+SEED_STANCE = 0.62
+WALK_STANCE_SLOPE = -0.0011  # stance share per step/min
+SEED_SHARES = (0.15, 0.30, 0.17)  # heel rocker, foot flat, push-off (cycle fractions at the seed pace)
+# fitted by `gaitsim loop` to the shared walking recordings (results/loop/*/attribution.json: gaitmap left/right,
+# x-io long/short walk at 97-108 steps/min): toe-off pitch 49-65 deg, its reversal -5600..-7400 deg/s^2
+WALK_FIT_CADENCE = 103.0  # steps/min, their mean cadence
+WALK_TOE_OFF_SLOPE = 0.67  # deg per step/min: from the seed's 45 deg at 84 to their mean 57.7 deg at 103
+WALK_TOE_OFF_ACCEL = -6350.0  # deg/s^2 at WALK_FIT_CADENCE, their mean; scales with the cadence squared
+
+RUN_CADENCE = 165.0  # steps/min, the middle of the running span
+RUN_STEP_M = 1.2
+RUN_DUTY = 0.37
+RUN_DUTY_SLOPE = -0.002  # per step/min
+RUN_SHARES = (0.10, 0.09, 0.18)  # heel (or toe) rocker, foot flat, push-off at RUN_DUTY
+
+# peak |specific force| (g) and |rate| (deg/s) at the foot measured per gait (see the module docstring)
+PUBLISHED_PEAKS = {"walk": {"accel_g": (5.0, 15.0), "gyro_dps": (600.0, 1000.0)},
+                   "run": {"accel_g": (15.0, 15.0), "gyro_dps": (1500.0, 1500.0)}}
+
+
+def _phases(stance: float, shares: tuple[float, float, float]) -> dict:
+    """Phase fractions of the cycle: the stance split in the proportions of ``shares``, the rest swing."""
+    total = sum(shares)
+    rocker, flat, push = (stance * s / total for s in shares)
+    return {"heel_rocker_frac": rocker, "foot_flat_frac": flat, "push_off_frac": push,
+            "swing_frac": 1.0 - rocker - flat - push}
+
+
+def walk_tables(cadence: float) -> dict[str, dict]:
+    """Scenario tables of walking at ``cadence`` steps/min (see the module docstring)."""
+    pace = cadence / SEED_CADENCE
+    step = SEED_STEP_M + WALK_STEP_SLOPE * (cadence - SEED_CADENCE)
+    speed_ratio = step * cadence / (SEED_STEP_M * SEED_CADENCE)
+    gait = {"cadence_steps_per_min": cadence, "stride_length_m": 2 * step,
+            **_phases(SEED_STANCE + WALK_STANCE_SLOPE * (cadence - SEED_CADENCE), SEED_SHARES),
+            "pitch_heel_strike_deg": -(20.0 + 0.12 * (cadence - SEED_CADENCE)),
+            "pitch_toe_off_deg": 45.0 + WALK_TOE_OFF_SLOPE * (cadence - SEED_CADENCE),
+            "pitch_rate_heel_strike_dps": 60.0 * pace, "pitch_rate_toe_off_dps": 150.0 * pace,
+            "pitch_accel_toe_off_dps2": WALK_TOE_OFF_ACCEL * (cadence / WALK_FIT_CADENCE) ** 2}
+    impact = {"heel_strike_velocity_mps": [0.25 * speed_ratio, 0.0, -0.3 * speed_ratio],
+              "slap_rate_dps": 250.0 * pace}
+    return {"gait": gait, "impact": impact, "micromotion": {}}
+
+
+def run_tables(cadence: float, forefoot: bool) -> dict[str, dict]:
+    """Scenario tables of running at ``cadence`` steps/min, rearfoot or forefoot strike (see the module
+    docstring)."""
+    duty = RUN_DUTY + RUN_DUTY_SLOPE * (cadence - RUN_CADENCE)
+    gait = {"cadence_steps_per_min": cadence, "stride_length_m": 2 * RUN_STEP_M,
+            **_phases(duty, RUN_SHARES), "forefoot_strike": forefoot,
+            "pitch_heel_strike_deg": 8.0 if forefoot else -15.0,
+            "pitch_rate_heel_strike_dps": -200.0 if forefoot else 200.0,
+            "pitch_toe_off_deg": 70.0, "pitch_rate_toe_off_dps": 1000.0, "pitch_accel_toe_off_dps2": -25_000.0,
+            "swing_height_m": 0.15, "stride_length_sd_m": 0.04}
+    impact = {"heel_strike_velocity_mps": [0.4, 0.0, -0.8], "heel_strike_duration_s": 0.015,
+              "slap_rate_dps": 250.0, "slap_duration_s": 0.02}
+    micro = {"creep_ramp_s": 0.02, "loading_duration_s": 0.04}
+    return {"gait": gait, "impact": impact, "micromotion": micro}
+
+
+def kind_tables(kind: str, cadence: float | None) -> dict[str, dict]:
+    """Default scenario tables ({section: {key: value}}, keys in their units) of gait ``kind`` at ``cadence``
+    steps/min (None: the kind's default cadence); empty tables for ``"custom"``.
+
+    Raises
+    ------
+    ValueError
+        for an unknown kind, or a cadence outside the span the kind's defaults are documented for (the message
+        names the key and the value; the scenario reader adds the file).
+    """
+    if kind not in KINDS:
+        raise ValueError(f"kind = {kind!r} is not allowed; allowed: {', '.join(KINDS)}")
+    if kind == "custom":
+        return {"gait": {}, "impact": {}, "micromotion": {}}
+    cadence = DEFAULT_CADENCE[kind] if cadence is None else cadence
+    low, high = CADENCE_SPAN[kind]
+    if not (math.isfinite(cadence) and low <= cadence <= high):
+        raise ValueError(f"cadence_steps_per_min = {cadence!r} is not allowed with kind = {kind!r}; its "
+                            f"defaults hold for {low:g}-{high:g} steps/min (kind = 'custom' and explicit keys "
+                            "for other paces)")
+    if kind == "walk":
+        return walk_tables(cadence)
+    return run_tables(cadence, forefoot=kind == "run-forefoot")

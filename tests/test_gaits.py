@@ -1,0 +1,140 @@
+"""Gaits (issue 17): the laws of the truth hold for every gait kind, the kinds reach the published foot peaks, a
+forefoot strike turns about its toe contact, stops stand still, and bad gait keys are refused by name."""
+
+import numpy as np
+import pytest
+
+from gaitsim.errors import ScenarioError
+from gaitsim.scenario import scenario_from_dict
+from gaitsim.simulate import run_generators, simulate_walk
+from gaitsim.world.foot import FootModel, Mount
+from gaitsim.world.gait import plan_stances
+from gaitsim.world.gaits import PUBLISHED_PEAKS
+from gaitsim.world.profile import FootTrajectory
+from strapdown_reference import integrate_increments
+
+G = 9.81
+GAITS = {
+    "walk-60": {"kind": "walk", "cadence_steps_per_min": 60.0},
+    "walk-130": {"kind": "walk", "cadence_steps_per_min": 130.0},
+    "run-rearfoot-180": {"kind": "run-rearfoot", "cadence_steps_per_min": 180.0},
+    "run-forefoot-150": {"kind": "run-forefoot", "cadence_steps_per_min": 150.0},
+    "stop-and-go": {"kind": "walk", "stop_every_strides": 2, "stop_duration_s": 1.5},
+}
+
+
+def gait_walk(gait: dict, length_m: float = 9.0, **sections):
+    doc = {"path": {"kind": "straight", "length_m": length_m, "yaw_deg": 30.0},
+           "gait": {"stand_start_s": 1.0, "stand_end_s": 1.0, **gait}, **sections}
+    return scenario_from_dict(doc, "test")
+
+
+@pytest.fixture(scope="module", params=sorted(GAITS))
+def gait_run(request):
+    scen = gait_walk(GAITS[request.param])
+    return request.param, scen, simulate_walk(scen)
+
+
+def test_joint_trajectories_are_c4_at_every_event(gait_run):
+    _, scen, _ = gait_run
+    plan = plan_stances(scen.walk, run_generators(0)[0])
+    traj = FootTrajectory(scen.walk, plan, 0.2)
+    imp = scen.walk.impact
+    knots = np.concatenate([plan.t_ic, plan.t_ff, plan.t_ho, plan.t_to, plan.t_ff - imp.slap_duration_s,
+                            plan.t_ic + imp.heel_strike_duration_s])
+    knots = knots[(knots > 1e-3) & (knots < plan.t_end - 1e-3)]
+    jumps = np.abs(traj.joints(knots + 1e-9) - traj.joints(knots - 1e-9)).max(axis=2)
+    scale = np.abs(traj.joints(np.linspace(0, plan.t_end, 20001))).max(axis=2) + 1e-12
+    assert (jumps / scale).max() < 1e-5
+
+
+def test_exact_increments_reproduce_a_stride(gait_run):
+    """From one heel strike to past the next (both impacts included), the increments integrate to the truth."""
+    tr, ev = gait_run[2].truth, gait_run[2].events
+    i0, i1 = np.searchsorted(tr.t, [ev.t_ic[1] - 0.05, ev.t_ic[2] + 0.05])
+    dt = tr.t[1] - tr.t[0]
+    _, _, p = integrate_increments(tr.quat[i0], tr.vel[i0], tr.pos[i0], tr.dv[i0:i1], tr.dth[i0:i1], dt)
+    assert np.linalg.norm(p - tr.pos[i1]) < 1e-4  # float64 round-off of ~1500 steps; a wrong increment is cm
+
+
+def test_imu_moves_by_the_labelled_stance_displacement(gait_run):
+    name, scen, rec = gait_run
+    tr, ev = rec.truth, rec.events
+    speed = np.linalg.norm(tr.vel[tr.stance], axis=1).max()
+    assert speed < 0.1, name  # the labelled stance is (almost) still in every gait
+    for k in range(1, len(ev.t_ic) - 1):
+        i0, i1 = np.searchsorted(tr.t, [ev.t_ff[k], ev.t_ho[k]])
+        assert np.linalg.norm(tr.pos[i1] - tr.pos[i0] - ev.stance_displacement[k]) < 2 * speed / scen.rate_hz + 1e-9
+
+
+@pytest.mark.parametrize("name", ["walk-130", "run-rearfoot-180", "run-forefoot-150"])
+def test_kinds_keep_their_published_timing(name):
+    """Walking has more stance than swing, running a flight phase (stance < 50 %), and running contact is short."""
+    scen = gait_walk(GAITS[name])
+    g = scen.walk.gait
+    stance = g.heel_rocker_frac + g.foot_flat_frac + g.push_off_frac
+    contact_s = stance * g.cycle_s
+    if name.startswith("walk"):
+        assert stance > 0.5
+    else:
+        assert 0.3 < stance < 0.45 and 0.15 < contact_s < 0.35
+
+
+@pytest.mark.parametrize("kind, cadence, published", [
+    ("walk", 103.0, "walk"), ("run-rearfoot", 150.0, "run"), ("run-rearfoot", 180.0, "run"),
+    ("run-forefoot", 165.0, "run")])
+def test_peaks_are_within_20_percent_of_published_foot_imu_measurements(kind, cadence, published):
+    rec = simulate_walk(gait_walk({"kind": kind, "cadence_steps_per_min": cadence}, length_m=30.0))
+    accel_g = np.linalg.norm(rec.truth.acc, axis=1).max() / G
+    gyro_dps = np.degrees(np.linalg.norm(rec.truth.gyr, axis=1).max())
+    peaks = PUBLISHED_PEAKS[published]
+    low, high = peaks["accel_g"]
+    assert 0.8 * low <= accel_g <= 1.2 * high, accel_g
+    low, high = peaks["gyro_dps"]
+    assert 0.8 * low <= gyro_dps <= 1.2 * high, gyro_dps
+
+
+def test_forefoot_strike_turns_about_the_still_toe_contact():
+    scen = gait_walk(GAITS["run-forefoot-150"], micromotion={"enabled": False})
+    plan = plan_stances(scen.walk, run_generators(0)[0])
+    foot = FootModel(Mount(), G)
+    traj = FootTrajectory(scen.walk, plan, foot.toe_length)
+    toe = np.array([foot.toe_length, 0.0, 0.0])
+    for k in range(1, plan.n_strides):
+        t = np.linspace(plan.t_ic[k] + scen.walk.impact.heel_strike_duration_s, plan.t_ff[k], 50)
+        moved = traj.point(t, toe) - traj.point(t[:1], toe)
+        assert np.abs(moved).max() < 1e-9  # the toe contact stays put while the heel comes down
+        heel = traj.point(np.array([plan.t_ic[k], plan.t_ff[k]]), np.zeros(3))
+        assert heel[0, 2] - heel[1, 2] > 0.02  # the heel starts in the air and lands at foot flat
+
+
+def test_stops_stand_exactly_still_for_their_duration():
+    scen = gait_walk(GAITS["stop-and-go"], length_m=12.0)
+    plan = plan_stances(scen.walk, run_generators(0)[0])
+    stops = np.flatnonzero(~plan.walking[1:-1]) + 1
+    assert list(stops) == list(range(2, plan.n_strides, 2))
+    flat = plan.t_ho - plan.t_ff
+    np.testing.assert_allclose(flat[stops] - np.median(flat[plan.walking]), 1.5, atol=0.05)
+    rec = simulate_walk(scen)
+    for k in stops:
+        inside = (rec.truth.t > rec.events.t_ff[k]) & (rec.truth.t < rec.events.t_ho[k])
+        assert np.abs(rec.truth.vel[inside]).max() < 1e-12
+        np.testing.assert_allclose(rec.events.stance_displacement[k], 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("gait, fragment", [
+    ({"kind": "jog"}, "kind = 'jog' is not allowed; allowed: custom, walk, run-rearfoot, run-forefoot"),
+    ({"kind": "walk", "cadence_steps_per_min": 150.0}, "cadence_steps_per_min = 150.0 is not allowed with kind = 'walk'"),
+    ({"kind": "run-forefoot", "pitch_heel_strike_deg": -10.0}, "pitch_heel_strike_deg = -10.0"),
+    ({"forefoot_strike": True}, "lands toes down"),
+])
+def test_bad_gait_kind_keys_are_refused_by_name(gait, fragment):
+    with pytest.raises(ScenarioError, match="test \\[gait\\]") as err:
+        gait_walk(gait)
+    assert fragment in str(err.value)
+
+
+def test_written_keys_override_the_kind_and_the_paper_walk_is_unchanged():
+    walk = gait_walk({"kind": "walk", "cadence_steps_per_min": 100.0, "stride_length_m": 1.2}).walk.gait
+    assert walk.stride_length_m == 1.2 and walk.swing_frac > 0.38
+    assert gait_walk({}).walk.gait == gait_walk({"kind": "custom"}).walk.gait
