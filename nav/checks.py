@@ -23,11 +23,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import quaternion as quat
-from .alignment import tilt_from_specific_force
+from .closure import stride_closure
 from .constants import DEFAULT_GRAVITY
 from .recording import IMU_COLUMNS, Recording, RecordingError, require_finite
-from .strapdown import integrate
 
 STATIC_WINDOW_S = 0.5  # s, length of the quietest window used for the unit checks
 RATE_RANGE_HZ = (20.0, 5000.0)  # sample rates of foot IMUs (60 Hz trackers to 1-4 kHz lab sensors)
@@ -128,37 +126,31 @@ def rest_runs(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
     return starts[long_enough], ends[long_enough]
 
 
-def stride_closure(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity (m/s) and tilt (rad) each stride ends with when the gyro carries the accelerometer's attitude.
+def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray,
+                          gravity: float) -> tuple[np.ndarray, np.ndarray]:
+    """Speed (m/s) and tilt (rad) each stride ends with when the gyro carries the accelerometer's attitude.
 
     For each pair of rests (:func:`rest_runs`) ``STRIDE_RANGE_S`` apart, the attitude levelled on the first
-    rest's specific force is carried by the gyro (strapdown, RK4, from rest) to the start of the next rest. There
-    the foot is still again: the speed the strapdown ends with and the angle between the gravity direction it
-    predicts and the measured specific force stay small (cm/s, degrees) for a consistent sensor, and grow to m/s
-    and tens of degrees for a gyro scaled wrong (or in deg/s) against the accelerometer: gravity is projected
-    with the wrong attitude through the swing. (Flipping every accelerometer sign mirrors the walk and closes;
-    that one shows at rest as gravity along -z.)
+    rest's mean specific force is carried by the raw gyro (no bias removed) from the last sample of that rest to
+    the first sample of the next (:func:`nav.closure.stride_closure`). There the foot is still again: the speed
+    the strapdown ends with and the angle between the gravity direction it carried and the next rest's mean
+    specific force stay small (cm/s, degrees) for a consistent sensor, and grow to m/s and tens of degrees for a
+    gyro scaled wrong (or in deg/s) against the accelerometer: gravity is projected with the wrong attitude
+    through the swing. (Flipping every accelerometer sign mirrors the walk and closes; that one shows at rest as
+    gravity along -z.)
 
     Returns
     -------
-    speed : (strides,) m/s, |v| at the next rest.
-    tilt : (strides,) rad, tilt mismatch at the next rest.
+    speed : (strides,) m/s, |v| at the first sample of the next rest.
+    tilt : (strides,) rad, angle between the carried and the read gravity direction there.
     """
     starts, ends = rest_runs(t, acc, gyr, gravity)
-    speed, tilt = [], []
-    for k in range(len(starts) - 1):
-        first, last = ends[k] - 1, starts[k + 1]
-        if not STRIDE_RANGE_S[0] <= t[last] - t[first] <= STRIDE_RANGE_S[1]:
-            continue
-        roll, pitch = tilt_from_specific_force(acc[starts[k]:ends[k]].mean(axis=0))
-        window = slice(first, last + 1)
-        path = integrate(t[window], acc[window], gyr[window], quat.from_euler_zyx(0.0, pitch, roll), gravity=gravity)
-        predicted_up = quat.rotate(quat.conjugate(path.quat[-1]), np.array([0.0, 0.0, 1.0]))
-        measured = acc[starts[k + 1]:ends[k + 1]].mean(axis=0)
-        cosine = float(np.dot(predicted_up, measured) / np.linalg.norm(measured))
-        tilt.append(math.acos(min(1.0, max(-1.0, cosine))))
-        speed.append(float(np.linalg.norm(path.vel[-1])))
-    return np.array(speed), np.array(tilt)
+    first, last = ends[:-1] - 1, starts[1:]
+    stride = (STRIDE_RANGE_S[0] <= t[last] - t[first]) & (t[last] - t[first] <= STRIDE_RANGE_S[1])
+    rests = np.column_stack([starts, ends])
+    found = stride_closure(t, acc, gyr, rests[:-1][stride], first[stride],
+                           np.column_stack([last, last + 1])[stride], rests[1:][stride], gravity)
+    return np.linalg.norm(found.velocity, axis=1), found.angle
 
 
 def flat_tops(x: np.ndarray, rest_level: np.ndarray, rest_sd: np.ndarray) -> dict[str, int]:
@@ -277,7 +269,7 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
     if clipped:
         report.warn(f"{name}: flat tops at a column's extreme value (possible clipping), samples per column: "
                     f"{clipped}", clipped_samples=clipped)
-    speed, tilt = stride_closure(t, acc, gyr, gravity)
+    speed, tilt = closure_between_rests(t, acc, gyr, gravity)
     report.counts["closure_strides"] = len(speed)
     if len(speed) >= MIN_CLOSURE_STRIDES:
         median = float(np.median(speed))

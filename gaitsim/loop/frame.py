@@ -30,7 +30,7 @@ from nav.recording import Recording, RecordingError
 
 from ..measured import axes
 from . import settings
-from .closure import stride_closure
+from .closure import closure_between_stances
 from .strides import stance_intervals
 
 MIRROR = np.diag([-1.0, 1.0, 1.0])
@@ -64,7 +64,7 @@ def _median_closure(rec: Recording, matrix: np.ndarray, pairs: np.ndarray) -> fl
     """Median |stride closure velocity| (m/s) of the data mapped by ``matrix``."""
     acc, gyr = rec.acc @ matrix.T, rec.gyr @ matrix.T
     rest = slice(*pairs[0, 0])
-    found = stride_closure(rec.t, acc, gyr, pairs[:, 0], pairs[:, 1], rec.gravity, gyr[rest].mean(0))
+    found = closure_between_stances(rec.t, acc, gyr, pairs[:, 0], pairs[:, 1], rec.gravity, gyr[rest].mean(0))
     return float(np.median(np.linalg.norm(found.velocity, axis=1)))
 
 

@@ -59,7 +59,7 @@ from nav.constants import DEFAULT_GRAVITY
 from nav.series import resample
 
 from . import settings
-from .closure import following, stride_closure
+from .closure import closure_between_stances, following
 from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
@@ -245,9 +245,9 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     rest = slice(*stances_all[0])
     scalars["rest_acc_norm"] = _rest_acc_norm(acc[rest])
     scalars.update(_rest_changes(t, acc, gyr, stances_all))
-    closing = stride_closure(t, acc, gyr, stances, following(stances, stances_all), gravity,
-                             rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
-    for name, column in zip(CLOSURE, np.column_stack([closing.velocity, closing.tilt]).T):
+    closing = closure_between_stances(t, acc, gyr, stances, following(stances, stances_all), gravity,
+                                      rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
+    for name, column in zip(CLOSURE, np.column_stack([closing.velocity, np.degrees(closing.tilt[:, :2])]).T):
         scalars[name] = mean_se(column)
     curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
     return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
