@@ -3,6 +3,7 @@
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from gaitsim.experiments.reproduce import reproduce
@@ -61,3 +62,14 @@ def test_dask_cluster_gives_identical_numbers(quick, tmp_path):
         dask = reproduce(tmp_path / "dask", quick=True, scheduler=cluster.scheduler_address, progress=False)
     assert json.dumps(dask["compensation"], sort_keys=True) == json.dumps(s["compensation"], sort_keys=True)
     assert dask["threshold_sweep"] == s["threshold_sweep"]
+
+
+def test_fig5_rise_allows_a_fall_within_its_standard_error_only():
+    from gaitsim.experiments.report import fig5_rises
+
+    walks = np.random.default_rng(3).normal(0.0, 0.01, 10)
+    rising = {1e4: walks + 0.50, 2e4: walks + 0.60, 3e4: walks + 0.70}
+    assert fig5_rises(rising)
+    flat = np.random.default_rng(4).normal(0.0, 0.01, 10)
+    assert fig5_rises({**rising, 3e4: rising[2e4] + flat - flat.mean() - 0.5 * flat.std(ddof=1) / np.sqrt(10)})
+    assert not fig5_rises({**rising, 3e4: walks + 0.55})  # a fall of 0.05 m on identical walks
