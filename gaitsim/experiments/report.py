@@ -291,8 +291,10 @@ Pipelines: `before` = the lab's estimate of {', '.join(s['experiment']['before_c
 `calibration` = all estimated calibration terms; `stance_velocity` = `before` + the fitted stance
 pseudo-velocity; `both` = both steps. The calibration comes from the simulated lab (seed {s['experiment']['lab_seed']}),
 the pseudo-velocity from {s['stance_velocity_fit']['walks']} tracked calibration walks (seed
-{s['stance_velocity_fit']['seed']}, {s['stance_velocity_fit']['stances']} stances, 60 Hz tracker with 1 mm resolution):
-never from the truth of the scored runs.
+{s['stance_velocity_fit']['seed']}, {s['stance_velocity_fit']['stances']} stances of steps, 60 Hz tracker with 1 mm
+resolution, velocity from the central differences inside each stance;
+{s['stance_velocity_fit']['stances_shorter_than_the_tracker_difference']} detected fragments shorter than a
+difference left out): never from the truth of the scored runs.
 
 ## Ablation (each calibration term alone; `raw` = no calibration at all)
 
