@@ -38,8 +38,9 @@ def test_each_compensation_step_removes_its_error(quick):
     along = {v: comp[v]["along_track_error_m"]["mean"] for v in comp}
     # step 1 removes the g-sensitivity heading drift (paper's G_g: ~0.02-0.03 deg/s)
     assert drift["before"] > 0.01 and drift["calibration"] < 0.3 * drift["before"]
-    # step 2 removes most of the stance-velocity length loss
-    assert along["before"] > 0.05 and abs(along["stance_velocity"]) < 0.5 * along["before"]
+    # step 2 removes most of the stance-velocity length loss (the rolling foot's in-window motion loses ~0.25 %
+    # of the 14 m quick walk)
+    assert along["before"] > 0.02 and abs(along["stance_velocity"]) < 0.5 * along["before"]
     # on a 14 m quick walk the noise floor is a larger share than on 99.6 m (full run: 9x)
     assert comp["both"]["final_error_m"]["mean"] < 0.6 * comp["before"]["final_error_m"]["mean"]
 
