@@ -177,7 +177,7 @@ STILL_ROLL = {"pronation_rate_dps": 0.0, "loading_roll_rate_dps": 0.0, "stance_r
 def _contact_kinematics(traj, t):
     """World position of the ground contact, angular velocity (world) and heel velocity at times t."""
     j = traj.joints(t)
-    (yaw, pitch, roll), (dyaw, dpitch, droll) = j[3:, 0], j[3:, 1]
+    (yaw, pitch, _), (dyaw, dpitch, droll) = j[3:, 0], j[3:, 1]
     heel, heel_vel = j[:3, 0].T, j[:3, 1].T
     rz = Q.to_matrix(Q.from_euler_zyx(yaw, 0 * yaw, 0 * yaw))
     rzy = Q.to_matrix(Q.from_euler_zyx(yaw, pitch, 0 * yaw))
