@@ -56,7 +56,8 @@ STEPS = {
 NESTED = {"checks, detection, alignment": "compensation"}  # outer step -> the step timed inside it
 
 
-CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}  # cpu: this process's CPU time, s
+CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}  # cpu: the calling thread's CPU time, s (a Dask
+# worker's own threads do not count)
 
 
 @contextlib.contextmanager
