@@ -405,8 +405,10 @@ def _start_worker(parent_pid: int) -> None:
 
 
 def limit_worker_threads() -> None:
-    """Run this process's numba and BLAS/OpenMP code on one thread each: a worker of a pool or cluster that
-    parallelises over tasks. Results do not depend on it (tests/test_experiments.py compares pool and Dask runs).
+    """Run numba and BLAS/OpenMP code on one thread each: a worker of a pool or cluster that parallelises over
+    tasks. The BLAS limit holds for the whole process, numba's for the calling thread (numba keeps the count per
+    thread), so a Dask worker calls this in the thread that runs each task. Results do not depend on it
+    (tests/test_runner.py compares one and two BLAS threads).
 
     The counts are set at run time rather than through ``NUMBA_NUM_THREADS`` or ``OPENBLAS_NUM_THREADS``: numba
     refuses a changed variable once its threads are up, so setting it in a process that has already compiled (a
@@ -467,8 +469,7 @@ def _dask_outcomes(fn, tasks, pending, scheduler) -> Iterator[_Outcome]:
         client = scheduler
     futures = {}
     try:
-        client.run(limit_worker_threads)
-        futures = {client.submit(_execute, fn, tasks[index], pure=False): index for index in pending}
+        futures = {client.submit(_execute_on_cluster, fn, tasks[index], pure=False): index for index in pending}
         for future in distributed.as_completed(list(futures)):
             yield futures[future], *_future_outcome(future)
     finally:
@@ -477,6 +478,13 @@ def _dask_outcomes(fn, tasks, pending, scheduler) -> Iterator[_Outcome]:
             client.cancel(unfinished)
         if own_client:
             client.close()
+
+
+def _execute_on_cluster(fn: Callable[[dict], dict], task: dict) -> tuple[bool, str]:
+    """:func:`_execute` on a Dask worker, in the worker's task thread under :func:`limit_worker_threads` (about
+    2 ms per task)."""
+    limit_worker_threads()
+    return _execute(fn, task)
 
 
 def _future_outcome(future) -> tuple[bool, str]:
