@@ -10,13 +10,15 @@ runs per walk. The compensation is estimated once, as ``gaitsim reproduce`` does
 simulated calibration lab and tracked calibration walks with their own seeds); that one-off cost is printed apart.
 
 The tasks run through :func:`gaitsim.experiments.runner.run_tasks` (its local process pool: forkserver workers
-with one numba and one BLAS thread each), then again on a local Dask cluster through the same function's ``scheduler`` path,
-and the per-walk scores of the two are compared exactly (the maximum absolute difference must be 0).
+with one numba and one BLAS thread each), then again on a local Dask cluster through the same function's
+``scheduler`` path, and the per-walk scores of the two are compared exactly (the maximum absolute difference must
+be 0).
 
 The per-step split is measured inside the workers by timing the functions ``walk_task`` calls (see
 :data:`STEPS`); the step functions themselves are unchanged, so the results are those of the unwrapped code.
-Scheduling overhead = wall time - summed work / workers. The extrapolation to 1000 walks assumes the per-walk
-work and the overhead per walk stay as measured.
+Each step is timed on the wall clock and on the worker thread's CPU clock. Scheduling overhead = wall time -
+summed work / workers. The extrapolations to 1000 walks (see :func:`report`) assume the per-walk work and the
+overhead per walk stay as measured.
 """
 
 from __future__ import annotations
