@@ -126,7 +126,7 @@ def build_walks(walks: int, out: Path) -> tuple[list[dict], float]:
 
 
 def run_timed(tasks: list[dict], out: Path, **backend) -> tuple[list[dict], float]:
-    """Results of ``timed_walk`` over ``tasks`` through ``run_tasks`` (a fresh folder: nothing reused), wall time (s)."""
+    """Results of ``timed_walk`` over ``tasks`` through ``run_tasks`` (fresh folder: nothing reused), wall time (s)."""
     start = time.perf_counter()
     results = run_tasks(timed_walk, tasks, out, progress=False, **backend)
     return results, time.perf_counter() - start
