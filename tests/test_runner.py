@@ -245,3 +245,30 @@ def test_dask_cluster_matches_local_pool_and_serial(tmp_path):
     serial = run_tasks(random_walk_end, tasks, tmp_path / "serial", workers=1, progress=False)
     pooled = run_tasks(random_walk_end, tasks, tmp_path / "pool", workers=2, progress=False)
     assert by_address == resumed == pooled == serial == [expected(task) for task in tasks]
+
+
+def test_a_runs_numbers_do_not_depend_on_the_blas_thread_count():
+    # limit_worker_threads gives pool and Dask workers one BLAS thread while a serial run keeps the caller's: the
+    # IMU model, the compensation (solve), the filter and the scores must come out identical either way
+    from nav_synthetic import synthetic_walk
+    from threadpoolctl import threadpool_limits
+
+    from gaitsim.imu.model import apply_sensor
+    from gaitsim.imu.presets import get_preset
+    from nav import pipeline
+    from nav.recording import Recording
+
+    walk = synthetic_walk(strides=4)
+    sensor = get_preset("paper-vn200")
+    options = pipeline.NavOptions(calibration=sensor.deterministic(), rts=True)
+
+    def navigate(threads):
+        with threadpool_limits(threads):
+            t, acc, gyr = apply_sensor(sensor, walk.t, walk.truth.acc, walk.truth.gyr, np.random.default_rng(5))
+            sol, score = pipeline.run(Recording(t=t, acc=acc, gyr=gyr, truth=walk.truth), options)
+        return acc, gyr, sol.pos, sol.quat, json.dumps(score, sort_keys=True, default=str)
+
+    one, two = navigate(1), navigate(2)
+    for a, b in zip(one[:4], two[:4]):
+        np.testing.assert_array_equal(a, b)
+    assert one[4] == two[4]

@@ -27,6 +27,10 @@ Processes
     killed run leaves no worker behind; the forkserver and the resource tracker exit once their clients are gone. As a consequence ``fn`` must be
     picklable by reference (a function defined at the top level of an importable module), and a script that
     calls :func:`run_tasks` must guard its entry point with ``if __name__ == "__main__":``.
+    Every worker, of the pool or of a Dask cluster, runs one numba and one BLAS thread (:func:`limit_worker_threads`):
+    the experiment parallelises over tasks, and a BLAS thread pool inside each of several workers costs far more
+    than it gains on a run's (N, 3) x (3, 3) products (on this project's busy 2-core machine one such product of
+    84,000 rows took 23 ms with OpenBLAS's default threads and 0.5 ms with one).
 """
 
 from __future__ import annotations
@@ -394,16 +398,28 @@ def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
 
 
 def _start_worker(parent_pid: int) -> None:
-    """Worker initializer: one numba thread (the pool parallelises over tasks) and no life beyond the parent's.
+    """Worker initializer: one numba and one BLAS thread (:func:`limit_worker_threads`) and no life beyond the
+    parent's."""
+    limit_worker_threads()
+    _die_with_parent(parent_pid)
 
-    The thread count is set at run time rather than through ``NUMBA_NUM_THREADS``: numba refuses a changed variable
-    once its threads are up, so setting it in a process that has already compiled (a test session, a notebook)
-    breaks that process's next compilation.
+
+def limit_worker_threads() -> None:
+    """Run numba and BLAS/OpenMP code on one thread each: a worker of a pool or cluster that parallelises over
+    tasks. The BLAS limit holds for the whole process, numba's for the calling thread (numba keeps the count per
+    thread), so a Dask worker calls this in the thread that runs each task. Results do not depend on it
+    (tests/test_runner.py compares one and two BLAS threads).
+
+    The counts are set at run time rather than through ``NUMBA_NUM_THREADS`` or ``OPENBLAS_NUM_THREADS``: numba
+    refuses a changed variable once its threads are up, so setting it in a process that has already compiled (a
+    test session, a notebook) breaks that process's next compilation, and BLAS reads its variable only when it
+    loads, which in a forkserver worker has already happened.
     """
     import numba
+    from threadpoolctl import threadpool_limits
 
     numba.set_num_threads(1)
-    _die_with_parent(parent_pid)
+    threadpool_limits(1)
 
 
 def _die_with_parent(parent_pid: int) -> None:
@@ -453,7 +469,7 @@ def _dask_outcomes(fn, tasks, pending, scheduler) -> Iterator[_Outcome]:
         client = scheduler
     futures = {}
     try:
-        futures = {client.submit(_execute, fn, tasks[index], pure=False): index for index in pending}
+        futures = {client.submit(_execute_on_cluster, fn, tasks[index], pure=False): index for index in pending}
         for future in distributed.as_completed(list(futures)):
             yield futures[future], *_future_outcome(future)
     finally:
@@ -462,6 +478,13 @@ def _dask_outcomes(fn, tasks, pending, scheduler) -> Iterator[_Outcome]:
             client.cancel(unfinished)
         if own_client:
             client.close()
+
+
+def _execute_on_cluster(fn: Callable[[dict], dict], task: dict) -> tuple[bool, str]:
+    """:func:`_execute` on a Dask worker, in the worker's task thread under :func:`limit_worker_threads` (about
+    2 ms per task)."""
+    limit_worker_threads()
+    return _execute(fn, task)
 
 
 def _future_outcome(future) -> tuple[bool, str]:
