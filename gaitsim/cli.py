@@ -1,4 +1,5 @@
-"""Command line: ``gaitsim generate | nav | run | reproduce | loop | import | fixtures | score``. A thin layer over the Python API."""
+"""Command line: ``gaitsim generate | nav | run | reproduce | loop | stance | import | fixtures | score``. A thin layer
+over the Python API."""
 
 from __future__ import annotations
 
@@ -17,9 +18,10 @@ from .measured import import_command
 from .ranges import check_value
 from .scenario import load_scenario
 from .simulate import generate, summary
+from .stance import command as stance_command
 
 # subcommands living in their own modules; each exposes add_parser(subparsers)
-SUBCOMMANDS = (nav_command, experiments_command, loop_command, import_command, fixtures_command)
+SUBCOMMANDS = (nav_command, experiments_command, loop_command, stance_command, import_command, fixtures_command)
 
 
 def _generate(args) -> int:

@@ -112,15 +112,21 @@ RANGES: dict[str, dict[str, Range]] = {
         "ringing_accel_mps2": Range(-200, 200, "m/s^2", "anchors §7: impact peaks 5-19 g"),
     },
     "micromotion": {
+        "heel_rise_rate_start_dps": Range(-60, 60, "deg/s", MOTION_CAPTURE + "; a slow heel rise, not a push-off"),
+        "heel_rise_growth_dps3": Range(0, 1_000, "deg/s^3", MOTION_CAPTURE + "; 1000 deg/s^3 reaches 60 deg/s "
+                                                                         "after a 0.25 s foot flat"),
+        "contact_transfer_pitch_deg": Range(0.01, 20, "deg", "sole curvature: a 0.2 m foot rolls heel to toe over "
+                                                             "1-20 deg (sole radius 11 to 0.6 m); > 0"),
+        "contact_radius_m": Range(0, 0.05, "m", "heel pad and sole compression: a few mm to cm"),
+        "loading_roll_rate_dps": Range(-100, 100, "deg/s", MOTION_CAPTURE + "; loading pronation peaks 20-50 deg/s"),
+        "loading_duration_s": Range(0, 0.5, "s", "a fraction of a stance", open_low=True),
+        "pronation_rate_dps": Range(-100, 100, "deg/s", MOTION_CAPTURE),
+        "stance_rate_sd_frac": Range(0, 1, "", "stride-to-stride variation of the stance rates (measured 0.27-0.32)"),
         "creep_velocity_mps": Range(-0.2, 0.2, "m/s", MOTION_CAPTURE),
         "creep_ramp_s": Range(0, 0.5, "s", "a fraction of a stance", open_low=True),
-        "settle_velocity_mps": Range(-0.5, 0.5, "m/s", MOTION_CAPTURE),
-        "settle_duration_s": Range(0, 0.5, "s", "a fraction of a stance", open_low=True),
-        "heel_off_velocity_mps": Range(-0.5, 0.5, "m/s", MOTION_CAPTURE),
-        "heel_off_duration_s": Range(0, 0.5, "s", "a fraction of a stance", open_low=True),
         "stance_roll_rate_dps": Range(-100, 100, "deg/s", MOTION_CAPTURE),
         "stance_rotation_dps": Range(-100, 100, "deg/s", MOTION_CAPTURE),
-        "stance_rotation_pivot_frac": Range(0, 1, "", "0 = heel contact, 1 = toe contact"),
+        "stance_yaw_pivot_frac": Range(0, 1, "", "0 = heel contact, 1 = toe contact"),
     },
     "mount": {
         "offset_m": Range(-0.3, 0.3, "m", "stays on a shoe (foot length ~0.27 m)"),

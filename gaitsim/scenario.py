@@ -66,7 +66,10 @@ IN_DEGREES = {
                  "pitch_rate_toe_off_dps": "pitch_rate_toe_off", "pitch_accel_toe_off_dps2": "pitch_accel_toe_off",
                  "swing_roll_deg": "swing_roll", "toe_out_deg": "toe_out", "pitch_sd_deg": "pitch_sd"},
     ImpactParams: {"slap_rate_dps": "slap_rate"},
-    MicroMotionParams: {"stance_roll_rate_dps": "stance_roll_rate", "stance_rotation_dps": "stance_rotation_rate"},
+    MicroMotionParams: {"heel_rise_rate_start_dps": "heel_rise_rate_start", "heel_rise_growth_dps3": "heel_rise_growth",
+                        "contact_transfer_pitch_deg": "contact_transfer_pitch", "loading_roll_rate_dps": "loading_roll_rate",
+                        "pronation_rate_dps": "pronation_rate", "stance_roll_rate_dps": "stance_roll_rate",
+                        "stance_rotation_dps": "stance_rotation_rate"},
     Mount: {"rpy_deg": "rpy"},
 }
 WORLD_SECTIONS = {"gait": GaitParams, "impact": ImpactParams, "micromotion": MicroMotionParams, "mount": Mount}
@@ -262,16 +265,27 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
                                                  "heel_rocker_frac": gait["heel_rocker_frac"],
                                                  "push_off_frac": gait["push_off_frac"]}, written,
                       f"the creep ramp must be shorter than the heel rocker and push-off ({min(rocker, push):.3f} s)")
-    if not mm.heel_off_duration_s / 2 < push:
-        raise _blamed(f"{where} [micromotion]", {"heel_off_duration_s": micro["heel_off_duration_s"],
-                                                 "push_off_frac": gait["push_off_frac"]}, written,
-                      f"half of the heel-off pulse must fit into the push-off ({push:.3f} s)")
+    transfer_limit = 2.0 * min(abs(g.pitch_heel_strike), g.pitch_toe_off)
+    if not mm.contact_transfer_pitch <= transfer_limit:
+        raise _blamed(f"{where} [micromotion]", {"contact_transfer_pitch_deg": micro["contact_transfer_pitch_deg"],
+                                                 "pitch_heel_strike_deg": gait["pitch_heel_strike_deg"],
+                                                 "pitch_toe_off_deg": gait["pitch_toe_off_deg"]}, written,
+                      f"the foot must strike on its heel (or, striking with the forefoot, on its toes) and leave the "
+                      f"ground from its toes, outside the pitch range +-half the transfer pitch over which the "
+                      f"contact rolls along the sole: at most {math.degrees(transfer_limit):.3g} deg (twice the "
+                      f"smaller of the strike and toe-off pitch)")
+    _require(mm.foot in ("left", "right"), f"{where} [micromotion]", "foot", mm.foot, "allowed: left, right")
     flat = g.foot_flat_frac * g.cycle_s
-    if any(mm.stance_rotation_rate) and not 2 * mm.creep_ramp_s < flat:
-        raise _blamed(f"{where} [micromotion]", {"stance_rotation_dps": micro["stance_rotation_dps"],
-                                                 "creep_ramp_s": micro["creep_ramp_s"],
+    if not mm.loading_duration_s < flat:
+        raise _blamed(f"{where} [micromotion]", {"loading_duration_s": micro["loading_duration_s"],
                                                  "foot_flat_frac": gait["foot_flat_frac"]}, written,
-                      f"a stance rotation needs a foot flat ({flat:.3f} s) longer than two creep ramps")
+                      f"the loading pronation pulse must be shorter than the foot flat ({flat:.3f} s)")
+    held = {k: micro[k] for k in ("stance_rotation_dps", "pronation_rate_dps") if np.any(micro[k])}
+    if held and not 2 * mm.creep_ramp_s < flat:
+        raise _blamed(f"{where} [micromotion]", {**held, "creep_ramp_s": micro["creep_ramp_s"],
+                                                 "foot_flat_frac": gait["foot_flat_frac"]}, written,
+                      f"a rate held through the foot flat needs a foot flat ({flat:.3f} s) longer than two creep "
+                      f"ramps")
 
 
 def build_path(table: dict, gait: GaitParams, where: str):

@@ -1,10 +1,10 @@
 """Stance velocity models (compensation step 2 of the seed paper).
 
-In the detected stance the foot is not exactly still: it creeps forward by ~0.01 m/s and more at the stance
-edges that a larger threshold pulls into the ZUPT window. Instead of "velocity = 0", the ZUPT can use the
-expected residual velocity for the gait and the detector threshold. These models give it per sample, in the
-foot's heading frame (x forward along the foot's horizontal heading, y left, z up; m/s): the filter rotates it
-by its current heading estimate.
+In the detected stance the foot is not exactly still: it creeps or rolls by millimetres per second, more at
+the stance edges that a larger threshold pulls into the ZUPT window. Instead of "velocity = 0", the ZUPT can
+use the expected residual velocity for the gait and the detector threshold. These models give it per sample,
+in the foot's heading frame (x forward along the foot's horizontal heading, y left, z up; m/s): the filter
+rotates it by its current heading estimate.
 
 - :class:`ConstantStanceVelocity`: one vector for every stationary sample.
 - :class:`StanceVelocityProfile`: a velocity profile over normalised detected-stance time tau in [0, 1]
@@ -108,6 +108,9 @@ class StanceVelocityProfile:
         ----------
         stances : list of (n_i, 3) m/s heading-frame velocities, one per detected stance (see
             :func:`stance_velocities`); each is placed on tau_i = (j + 0.5) / n_i and interpolated linearly.
+            Every stance weighs the same whatever its length, so give the stances of steps only: not the rests
+            (they would also raise ``max_samples`` above them) and not fragments whose velocity the source
+            cannot resolve (a tracker's central difference is longer than a 10 ms fragment).
         knots : number of knots K on [0, 1].
         metadata : stored with the model (e.g. the detector's params.as_dict() and the gait).
         """

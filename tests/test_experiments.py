@@ -3,6 +3,7 @@
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from gaitsim.experiments.reproduce import reproduce
@@ -37,8 +38,9 @@ def test_each_compensation_step_removes_its_error(quick):
     along = {v: comp[v]["along_track_error_m"]["mean"] for v in comp}
     # step 1 removes the g-sensitivity heading drift (paper's G_g: ~0.02-0.03 deg/s)
     assert drift["before"] > 0.01 and drift["calibration"] < 0.3 * drift["before"]
-    # step 2 removes most of the stance-velocity length loss
-    assert along["before"] > 0.05 and abs(along["stance_velocity"]) < 0.5 * along["before"]
+    # step 2 removes most of the stance-velocity length loss (the rolling foot's in-window motion loses ~0.25 %
+    # of the 14 m quick walk)
+    assert along["before"] > 0.02 and abs(along["stance_velocity"]) < 0.5 * along["before"]
     # on a 14 m quick walk the noise floor is a larger share than on 99.6 m (full run: 9x)
     assert comp["both"]["final_error_m"]["mean"] < 0.6 * comp["before"]["final_error_m"]["mean"]
 
@@ -61,3 +63,14 @@ def test_dask_cluster_gives_identical_numbers(quick, tmp_path):
         dask = reproduce(tmp_path / "dask", quick=True, scheduler=cluster.scheduler_address, progress=False)
     assert json.dumps(dask["compensation"], sort_keys=True) == json.dumps(s["compensation"], sort_keys=True)
     assert dask["threshold_sweep"] == s["threshold_sweep"]
+
+
+def test_fig5_rise_allows_a_fall_within_its_standard_error_only():
+    from gaitsim.experiments.report import fig5_rises
+
+    walks = np.random.default_rng(3).normal(0.0, 0.01, 10)
+    rising = {1e4: walks + 0.50, 2e4: walks + 0.60, 3e4: walks + 0.70}
+    assert fig5_rises(rising)
+    flat = np.random.default_rng(4).normal(0.0, 0.01, 10)
+    assert fig5_rises({**rising, 3e4: rising[2e4] + flat - flat.mean() - 0.5 * flat.std(ddof=1) / np.sqrt(10)})
+    assert not fig5_rises({**rising, 3e4: walks + 0.55})  # a fall of 0.05 m on identical walks

@@ -57,11 +57,11 @@ def test_a_changed_default_in_the_code_recomputes_and_the_rerun_differs(tmp_path
     assert _run(tmp_path, "creep", out) == first  # unchanged code: the stored runs are reused
     gait = tmp_path / "gaitsim" / "world" / "gait.py"
     text = gait.read_text()
-    old = "creep_velocity_mps: tuple[float, float, float] = (0.01, 0.0, 0.0)"
+    old = "creep_velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)"
     assert old in text
-    gait.write_text(text.replace(old, old.replace("0.01", "0.03")))
+    gait.write_text(text.replace(old, old.replace("(0.0,", "(0.03,")))
     second = _run(tmp_path, "creep", out)
-    assert '"creep_mps": 0.01' in first and '"creep_mps": 0.03' in second
+    assert '"creep_mps": 0.0' in first and '"creep_mps": 0.03' in second
 
 
 def read_file(task):

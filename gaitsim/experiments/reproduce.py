@@ -108,7 +108,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
 
     main = _collect(results, tasks, "main/")
     summary = {
-        "quick": quick, "runs": runs, "scenario": str(scenario_path), "nav": dataclasses.asdict(nav),
+        "quick": quick, "runs": runs, "scenario": Path(scenario_path).name, "nav": dataclasses.asdict(nav),
         "experiment": dataclasses.asdict(exp), "stance_velocity_fit": stance_info,
         "compensation": {v: summarise_runs(main[v]) for v in main if "@" not in v and ":" not in v},
         "threshold_sweep": {float(v.split("@")[1]): [s["along_track_error_m"] for s in main[v]]
@@ -118,7 +118,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
         "heading": _collect(results, tasks, "heading/")["g_sensitivity_alone"][0],
         "budget": {v: summarise_runs(s) for v, s in _collect(results, tasks, "budget/").items()},
         "sensitivity": _sensitivity(results, tasks, main),
-        "walk": results[0]["walk"],
+        "walk": {**results[0]["walk"], "stride_period_s": avg.cycle_s},
     }
     summary["timings_s"] = timings
     report.write(out, summary, main, avg, results, tasks, doc, targets)

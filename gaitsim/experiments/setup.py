@@ -19,14 +19,14 @@ from nav import detectors
 from nav.ekf import FilterConfig
 from nav.pipeline import NavOptions, prepare
 from nav.recording import Recording
-from nav.series import resample
-from nav.zupt_velocity import StanceVelocityProfile, save_stance_velocity, stance_velocities
+from nav.alignment import stationary_runs
+from nav.zupt_velocity import StanceVelocityProfile, save_stance_velocity, to_heading_frame
 
 from ..errors import ScenarioError
 from ..imu.calibration_lab import run_lab
 from ..ranges import check_ranges
 from ..scenario import Scenario, fill, scenario_from_dict
-from .tracker import TrackerSpec, track
+from .tracker import TrackerSpec, track, velocity_within
 from ..simulate import simulate_walk
 
 
@@ -167,23 +167,32 @@ def fit_stance_velocity(doc: dict, nav: NavSettings, exp: ExperimentSettings, ca
     """Fit the stance pseudo-velocity from tracked calibration walks with their own seeds.
 
     Each calibration walk is recorded by the IMU (stance detected exactly as in the scored runs: same detector,
-    threshold and readout calibration) and by the simulated 60 Hz tracker; the tracked velocity, interpolated to
-    the IMU samples and rotated into the foot's heading frame, is averaged over normalised detected-stance time.
+    threshold and readout calibration) and by the simulated 60 Hz tracker. Each detected stance of a step (not
+    the standing rests before and after the walk, which the fitted model is then not applied to) gets the
+    tracked velocity from the central differences inside it (:func:`~.tracker.velocity_within`), rotated into
+    the foot's heading frame; the profile averages them over normalised detected-stance time. Detected stances
+    shorter than two tracker periods (fragments next to the main stance) have no such difference and are left
+    out: the tracker's velocity there is the landing's or the heel-off's, not the stance's.
     """
     threshold = nav.threshold if threshold is None else threshold
     spec = TrackerSpec(exp.tracker_rate_hz, exp.tracker_resolution_m, exp.tracker_noise_m)
     options = nav.options(threshold=threshold, calibration=calibration,
                           calibration_terms=exp.before_calibration_terms)
     scenario = scenario_from_dict(doc, "calibration walks")
-    stances = []
+    stances, unresolved = [], 0
     for k in range(exp.calibration_walks):
         rec: Recording = simulate_walk(scenario, seed=exp.calibration_walk_seed, run=k)
         tracked = track(rec.truth, spec, np.random.default_rng([exp.calibration_walk_seed, k]))
-        vel = resample(rec.t, tracked.t, tracked.vel)
-        stationary = prepare(rec, options).stationary
-        stances += stance_velocities(vel, rec.truth.quat, stationary)
+        starts, ends = stationary_runs(prepare(rec, options).stationary)
+        for a, b in list(zip(starts, ends))[1:-1]:  # the first and last runs are the rests around the walk
+            vel = velocity_within(tracked, rec.t[a:b])
+            if vel is None:
+                unresolved += 1
+            else:
+                stances.append(to_heading_frame(vel, rec.truth.quat[a:b]))
     meta = {"threshold": threshold, "walks": exp.calibration_walks, "seed": exp.calibration_walk_seed,
-            "tracker": dataclasses.asdict(spec), "stances": len(stances)}
+            "tracker": dataclasses.asdict(spec), "stances": len(stances),
+            "stances_shorter_than_the_tracker_difference": unresolved}
     model = StanceVelocityProfile.fit(stances, knots=exp.stance_profile_knots, metadata=meta)
     path = out / f"stance_velocity_{threshold:.0f}.json"
     save_stance_velocity(model, path)

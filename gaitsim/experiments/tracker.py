@@ -1,7 +1,9 @@
 """A simulated motion tracker: what the seed paper's magnetic tracker (Polhemus PATRIOT) saw of the foot.
 
 The tracker samples the IMU-site position at its own rate (60 Hz), adds white measurement noise and rounds to
-its resolution (1 mm); velocity is the central difference of the tracked positions, as in the paper. Used to
+its resolution (1 mm); velocity is the central difference of the tracked positions, as in the paper. A central
+difference spans two tracker periods (33 ms at 60 Hz): at the edge of a stance it reaches into the swing, so
+:func:`velocity_within` gives the velocity of one stance from the differences that lie inside it only. Used to
 draw Fig. 2-3 and to fit the stance pseudo-velocity model from *calibration walks* that have their own seeds,
 never from the truth of the runs being scored.
 """
@@ -59,3 +61,28 @@ def track(truth: Truth, spec: TrackerSpec, rng: np.random.Generator) -> Track:
         pos = np.round(pos / spec.resolution_m) * spec.resolution_m
     vel = np.gradient(pos, t, axis=0)
     return Track(t=t, pos=pos, vel=vel)
+
+
+def velocity_within(tracked: Track, t: np.ndarray) -> np.ndarray | None:
+    """Tracked velocity at the times t of one interval (e.g. a detected stance), seen from inside it only.
+
+    Only the central differences whose whole span (the tracker samples before and after) lies in
+    [t[0], t[-1]] are used, interpolated linearly to t and held constant towards the interval's edges: a
+    difference that straddles an edge averages in the motion outside (the heel-off or the landing) and biases
+    the stance velocity there by the swing's acceleration times a tracker period.
+
+    Parameters
+    ----------
+    tracked : the track (see :func:`track`).   t : (n,) s, increasing.
+
+    Returns
+    -------
+    (n, 3) m/s world frame, or None when no central difference fits inside (an interval shorter than two tracker
+    periods: the tracker cannot resolve a velocity there).
+    """
+    t = np.asarray(t, float)
+    inner = np.zeros(len(tracked.t), bool)
+    inner[1:-1] = (tracked.t[:-2] >= t[0]) & (tracked.t[2:] <= t[-1])
+    if not inner.any():
+        return None
+    return np.column_stack([np.interp(t, tracked.t[inner], tracked.vel[inner, i]) for i in range(3)])

@@ -20,6 +20,8 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
 - **Sensor position** on the foot (:mod:`gaitsim.loop.mount_fit`): the position along the foot and the height
   that best reproduce the recording's accelerometer phase profiles where the foot turns about a ground contact
   (linear least squares over three simulations).
+- **Foot side.** The stance model's roll (pronation) is a left foot's and is mirrored for a right foot: the twin
+  is a right foot when the recording's mean core-stance roll rate (``stance_rate_x``) is negative.
 - **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window,
   written as the sensor's ``mounting_misalignment`` (roll, pitch, 0); the library's ``mount_yaw`` effect
   fits the remaining yaw.
@@ -226,6 +228,7 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
         "gait": {"cadence_steps_per_min": 120.0 / measured["period_s"], "stride_length_m": stride_length,
                  "cycle_sd_frac": min(settings.MAX_CYCLE_SD_FRAC, measured["period_sd_frac"]),
                  "stand_start_s": stand_start, "stand_end_s": stand_end},
+        "micromotion": {"foot": "right" if sig.scalars["stance_rate_x"].value < 0 else "left"},
         "sampling": {"rate_hz": rate, "gravity_mps2": gravity},
         "sensor": {"preset": "ideal",
                    "accel_noise_density": [(acc_sd / math.sqrt(rate)).tolist(), "m/s^2/sqrt(Hz)"],

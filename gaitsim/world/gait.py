@@ -118,55 +118,93 @@ class ImpactParams:
 
 @dataclass(frozen=True)
 class MicroMotionParams:
-    """Foot motion during stance: velocities of the contact point in the walking frame (forward, left, up).
+    """The foot in stance: a rolling, compliant foot from initial contact to toe off.
 
-    The profile of one stance is the sum of a creep plateau over foot flat (C4 ramps of ``creep_ramp_s``
-    outside it), a settling pulse starting at foot flat and a heel-off pulse centred on heel off (pulse
-    shape 256 s^4 (1-s)^4, peak at mid-pulse). Standing at the start and end of a walk is exactly still.
+    The foot's pitch never stops in stance: after the forefoot lands (foot flat, the heel-toe line level) the
+    heel keeps rising slowly (ankle rocker), at a pitch rate ``heel_rise_rate_start + heel_rise_growth tau^2``
+    with tau the time since foot flat: the heel rise accelerates into the push-off the longer the foot has been
+    loaded (a slow walker's long foot flat ends at a faster heel rise than a fast walker's short one). As the
+    forefoot is loaded the foot rolls and turns (pronation, a pulse of roll and yaw rate), and it keeps
+    rolling and turning slowly through foot flat; the rates vary from stride to stride. The foot rolls on the
+    ground without slipping (:class:`gaitsim.world.profile.RollingSole`): about the heel contact while its pitch is below
+    ``-contact_transfer_pitch / 2`` (heel rocker), about the toe contact above ``+contact_transfer_pitch / 2``
+    (forefoot rocker), and in between on a convex sole whose contact moves from heel to toe as the foot pitches.
+    A compliant contact (``contact_radius_m``) rolls as if the instantaneous centre of rotation sat that deep
+    below the sole, and the contact creeps forward (``creep_velocity_mps``). A point of the foot at height z
+    above the ground therefore moves forward at ``pitch rate * (z + contact_radius_m) + creep``, so the velocity
+    of a foot IMU in stance follows its angular rate. Standing at the start and end of a walk is exactly still.
+
+    Defaults: fitted jointly to four tracked feet (gaitmap-healthy left and right, Vicon three-marker pose at
+    the sensor's lever arm, 204.8 Hz; ucr-fgo left and right, 60 Hz) by ``gaitsim stance --fit``
+    (:mod:`gaitsim.stance.fit`: foot-flat profiles of the angular rate, its sagittal part and, on gaitmap, the
+    IMU site's forward and vertical velocity; results/stance/fit.json). The fit put the contact radius and
+    the creep at zero: on these feet the site's velocity in foot flat is the rolling foot's, pitch rate times
+    height. ``stance_rate_sd_frac`` is measured, not fitted: the stride-to-stride coefficient of variation of
+    the mean core-stance angular rate is 0.27 to 0.32 on all four feet.
 
     Attributes
     ----------
-    enabled : switch. Default True.
-    creep_velocity_mps : m/s during foot flat. Default (0.01, 0, 0) (seed paper Fig. 3, anchors §7).
-    creep_ramp_s : s. Default 0.05.
-    settle_velocity_mps : m/s, peak of the pulse after foot flat. Default (0.02, 0, 0).
-    settle_duration_s : s. Default 0.08.
-    heel_off_velocity_mps : m/s, peak of the pulse around heel off. Default (0.02, 0, 0.005).
-    heel_off_duration_s : s. Default 0.10.
+    enabled : switch; False gives a still foot flat (level, no heel rise, creep, roll or yaw) for ablation.
+        Default True.
+    heel_rise_rate_start : rad/s, foot pitch rate (toes down = heel up) at foot flat. Default 3.0 deg/s.
+    heel_rise_growth : rad/s^3, growth of the pitch rate with the square of the time since foot flat.
+        Default 13 deg/s^3 (gaitmap's 0.38 s foot flat ends at 4.9 deg/s, UCR's 0.78 s one at 11 deg/s).
+    contact_transfer_pitch : rad, pitch range over which the contact rolls from the heel to the toe (the
+        flatter the sole, the smaller); centred on the level foot. Default 9.4 deg (a sole of radius
+        toe_length / 0.164 rad, 1.2 m for the 0.2 m foot).
+    contact_radius_m : m, depth of the rolling centre below the sole (compliant heel pad, sole and forefoot):
+        the sole's ground contact slides forward at pitch rate times this. Default 0.
+    loading_roll_rate : rad/s, peak roll rate of the foot as the forefoot is loaded (subtalar pronation), a
+        pulse (shape 256 s^4 (1-s)^4) over ``loading_duration_s`` from the start of the forefoot slap. Given for
+        a left foot (``foot``). Default 29 deg/s.
+    loading_duration_s : s, duration of that pulse. Default 0.13.
+    pronation_rate : rad/s, roll rate held through foot flat (C4 ramps of ``creep_ramp_s`` inside it): the
+        loaded foot keeps rolling slowly; the roll reached is held through the push-off and returned over the
+        swing. Roll turns about the heel-toe axis and moves neither contact: a sensor at height h moves
+        sideways at roll rate times h, not forward. Given for a left foot. Default 4.5 deg/s.
+    foot : "left" or "right": the roll above is a left foot's (positive = eversion) and is mirrored (negated)
+        for a right foot. Default "left". (Gaitmap's IMUs read a core-stance rate about their z axis of 5-6
+        deg/s, mirrored between the feet, but the Vicon markers on the same shoes turn by under 1 deg/s about
+        the vertical: the sensor turns on the shoe, the foot does not; the model has no stance yaw of its own.)
+    stance_rate_sd_frac : relative stride-to-stride standard deviation of the stance model's rates: each
+        walking stance scales its heel rise (pitch) and its roll rates by independent factors
+        ``max(0, 1 + stance_rate_sd_frac * N(0, 1))`` drawn with the stride variability. Default 0.3.
+    creep_velocity_mps : m/s, (forward, left, up) slide of the contact in the walking frame during foot flat.
+        Default (0, 0, 0).
+    creep_ramp_s : s, C4 ramps of the creep (outside foot flat) and of the held rates (inside it).
+        Default 0.05.
     stance_roll_rate : rad/s, stance roll-over (pronation, then supination) about the heel-toe axis: the
         roll rate is +rate at foot flat, falls linearly through zero at mid foot-flat to -rate at heel off, and
         rises from / returns to zero over the heel rocker / push-off (C4). Rolling about the contact axis moves
-        neither contact point. Core-stance mean |rate| is rate/2. Default 0 (a still foot flat).
-    stance_rotation_rate : rad/s, (roll, pitch, yaw) rates of a sustained rotation of the foot during foot flat:
-        each rate ramps up (C4, over ``creep_ramp_s``) after foot flat, holds, and ramps down to zero at heel
-        off, so the foot turns by rate * (foot flat - creep_ramp_s) during the stance; the angle is held through
-        the push-off and returned over the swing. The rates are ZYX Euler-angle rates on top of the gait's
-        angles, equal to the body rates about the foot's x (toes), y (left), z (up) axes to first order in the
-        (few-degree) stance angles. Measured foot IMUs show it in every recording (gaitmap, x-io, UCR:
-        core-stance rates of 2-6 deg/s per axis, signs mirrored in roll and yaw between left and right foot:
-        pronation, heel rise, internal rotation). Default (0, 0, 0). Fitted by ``gaitsim loop``
-        (results/loop/): a heel rise (pitch) of 5-6 deg/s on every measured foot, and roll and yaw that depend
-        on the side, about (+4, 5, -5) for a left foot and (-4, 5, +6) for a right one. The default stays off
-        because switching the pitch on changes the paper reproduction (along-track loss 0.93 -> 1.25 m) and
-        the blind bandwidth case (see the loop's README).
-    stance_rotation_pivot_frac : (pitch, yaw) pivots of the sustained rotation, each a fraction of the way from
-        the heel contact (0) to the toe contact (1): the foot yaws about the vertical axis through the yaw pivot,
-        then pitches about the lateral axis through the pitch pivot; roll turns about the heel-toe line and
-        moves no contact point. Default (1, 0): the heel rises about the forefoot and the foot turns about
-        the heel, as gaitmap's Vicon markers show (the heel-side sensor moves up at pitch rate x 0.20-0.23 m
-        and sideways at under 0.006 m/s while the foot yaws at 6 deg/s).
+        neither contact point. Core-stance mean |rate| is rate/2. Default 0.
+    stance_rotation_rate : rad/s, (roll, pitch, yaw) rates of a sustained rotation of the foot during foot flat
+        (the loop's effect, on top of the model's own rates and not mirrored). The pitch adds to the heel-rise
+        rate; roll and yaw each ramp up (C4, over ``creep_ramp_s``) after foot flat, hold, and ramp down to
+        zero at heel off; the angle is held through the push-off and returned over the swing. The rates equal
+        the body rates about the foot's x (toes), y (left), z (up) axes to first order in the (few-degree)
+        stance angles. Default (0, 0, 0). ``gaitsim loop`` (results/loop/) fitted a heel rise (pitch) of 5-6
+        deg/s on every measured foot, and roll and yaw that depend on the side, about (+4, 5, -5) for a left
+        foot and (-4, 5, +6) for a right one, against the simulator's earlier still foot flat.
+    stance_yaw_pivot_frac : where the foot-flat yaw turns the foot, a fraction of the way from the heel contact
+        (0) to the toe contact (1) on the level foot. Default 0 (about the heel, as gaitmap's Vicon markers
+        show: the heel-side sensor moves sideways at under 0.006 m/s while the foot yaws at 6 deg/s).
     """
 
     enabled: bool = True
-    creep_velocity_mps: tuple[float, float, float] = (0.01, 0.0, 0.0)
+    heel_rise_rate_start: float = math.radians(3.0)
+    heel_rise_growth: float = math.radians(13.0)
+    contact_transfer_pitch: float = math.radians(9.4)
+    contact_radius_m: float = 0.0
+    loading_roll_rate: float = math.radians(29.0)
+    loading_duration_s: float = 0.13
+    pronation_rate: float = math.radians(4.5)
+    foot: str = "left"
+    stance_rate_sd_frac: float = 0.3
+    creep_velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)
     creep_ramp_s: float = 0.05
-    settle_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.0)
-    settle_duration_s: float = 0.08
-    heel_off_velocity_mps: tuple[float, float, float] = (0.02, 0.0, 0.005)
-    heel_off_duration_s: float = 0.10
     stance_roll_rate: float = 0.0
     stance_rotation_rate: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    stance_rotation_pivot_frac: tuple[float, float] = (1.0, 0.0)
+    stance_yaw_pivot_frac: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -193,6 +231,7 @@ class StancePlan:
     walking : (n+1,) bool, True for full gait stances (micro-motion applies), False for standing (both ends and
         the stops of stop-and-go).
     t_end : s, end of the recording.
+    rate_scale : (n+1, 2) factors of the stance model's (pitch, roll) rates in each stance.
     """
 
     t_ic: np.ndarray
@@ -205,6 +244,7 @@ class StancePlan:
     pitch_to: np.ndarray
     walking: np.ndarray
     t_end: float
+    rate_scale: np.ndarray
 
     @property
     def n_strides(self) -> int:
@@ -222,7 +262,8 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
     if walk.path is None:
         z = np.zeros(1)
         return StancePlan(z, z, np.full(1, walk.duration_s), np.full(1, walk.duration_s),
-                          np.zeros((1, 2)), z.copy(), z.copy(), z.copy(), np.zeros(1, bool), walk.duration_s)
+                          np.zeros((1, 2)), z.copy(), z.copy(), z.copy(), np.zeros(1, bool), walk.duration_s,
+                          np.ones((1, 2)))
     n = max(1, int(round(walk.path.length / g.stride_length_m)))
     strides = 1.0 + rng.standard_normal(n) * g.stride_length_sd_m / g.stride_length_m
     s = np.concatenate([[0.0], np.cumsum(strides)]) * walk.path.length / strides.sum()
@@ -249,9 +290,10 @@ def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:
         t_to[k] = t_ho[k] + g.push_off_frac * (cycles[k] if k < n else c)
     t_end = t_ff[n] + g.stand_end_s
     t_ho[n] = t_to[n] = t_end
+    rate_scale = np.maximum(0.0, 1.0 + walk.micro.stance_rate_sd_frac * rng.standard_normal((n + 1, 2)))
     return StancePlan(
         t_ic, t_ff, t_ho, t_to, pos, yaw,
         g.pitch_heel_strike + pitch_noise[0],
         g.pitch_toe_off + pitch_noise[1],
-        walking, float(t_end),
+        walking, float(t_end), rate_scale,
     )

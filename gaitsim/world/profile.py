@@ -4,26 +4,29 @@ The foot body's origin is the heel contact point; the toe contact point sits ``t
 x axis. Joints (MuJoCo chain, outermost first): slide x, y, z of the heel point in the world, then yaw (z),
 pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 
-- Heel rocker [t_ic, t_ff]: rotation about the heel contact (fixed but for heel-strike compression and stance
-  micro-motion). Its last ``slap_duration_s`` stop the forefoot: pitch rate ``slap_rate * (1 - smoothstep)``.
-  A forefoot strike rotates about the toe contact instead (toe rocker), and its last ``slap_duration_s`` stop
-  the heel coming down: pitch rate ``-slap_rate * (1 - smoothstep)``.
-- Foot flat [t_ff, t_ho]: still, but for micro-motion, the optional stance roll-over (roll about the
-  heel-toe axis, which moves neither contact point) and the optional sustained stance rotation (about a pivot
-  on the heel-toe line; its angles are held through the push-off and returned over the swing).
-- Push-off [t_ho, t_to]: rotation about the toe contact, whose position follows the micro-motion.
+- Stance [t_ic, t_to]: the foot rolls on the ground without slipping (:class:`RollingSole`): the heel point is
+  a function of the foot's pitch alone, about the heel contact in the heel rocker, over the sole while the foot
+  is near level, about the toe contact in the push-off (and, after a forefoot strike, from the toe contact down
+  to foot flat: the same function of pitch, run backwards). On top: heel-strike compression, the contact's creep
+  (:class:`gaitsim.world.gait.MicroMotionParams`), impact ringing, the optional stance roll-over (roll about the
+  heel-toe axis, which moves neither contact point) and the optional sustained roll and yaw (the yaw about a
+  pivot on the heel-toe line; angles held through the push-off and returned over the swing).
+- Pitch: a Hermite through knots at heel strike, the start of the forefoot slap, foot flat (level, rising at the
+  heel-rise rate), heel off and toe off (:func:`pitch_profile`).
 - Swing [t_to, t_ic']: degree-9 Hermite of the heel point matching position and derivatives 1..4 at both ends,
   plus a C4 lift (height) and sideways excursion; yaw turns to the next stance with a C4 smoothstep.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from nav import quaternion as quat
 
 from . import smooth
-from .gait import GaitParams, ImpactParams, StancePlan, Walk
+from .gait import GaitParams, ImpactParams, MicroMotionParams, StancePlan, Walk
 
 JOINTS = ("x", "y", "z", "yaw", "pitch", "roll")
 
@@ -33,33 +36,138 @@ def _rot_z(yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams) -> smooth.Piecewise:
-    """Foot pitch (rad) of a walk: a Hermite through knots (value, rate, acceleration, 0, 0) at each stance's
-    heel strike (its drawn pitch, ``pitch_rate_heel_strike``, ``pitch_accel_heel_strike``), start of the
-    forefoot slap (``slap_rate``, with the angle left to stop at that rate), foot flat and heel off (level and
-    still) and toe off (its drawn pitch, ``pitch_rate_toe_off``, ``pitch_accel_toe_off``); level at the start
-    and the end. The slap turns the foot toward level: toes down after a heel strike, heel down after a forefoot
-    strike."""
+def heel_rise_rates(micro: MicroMotionParams, foot_flat: float, scale: float = 1.0) -> tuple[float, float]:
+    """Pitch rates (rad/s) of a walking stance at foot flat and at heel off, ``foot_flat`` s later: the heel
+    rise (times the stance's ``scale``) plus the sustained stance rotation's pitch; both zero for a still foot
+    (``enabled`` False)."""
+    if not micro.enabled:
+        return 0.0, 0.0
+    start = scale * micro.heel_rise_rate_start + micro.stance_rotation_rate[1]
+    return start, start + scale * micro.heel_rise_growth * foot_flat**2
+
+
+def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams,
+                  micro: MicroMotionParams = MicroMotionParams()) -> smooth.Piecewise:
+    """Foot pitch (rad) of a walk: a Hermite through knots (value and derivatives 1..4).
+
+    Knots of a walking stance: heel strike (its drawn pitch, ``pitch_rate_heel_strike``,
+    ``pitch_accel_heel_strike``); start of the forefoot slap (``slap_rate``, the angle left to reach
+    the foot-flat rate linearly); foot flat (level) and heel off, between which the pitch rate grows from the
+    first to the second heel-rise rate of :func:`heel_rise_rates` with the square of the time since foot flat
+    (a cubic pitch, given exactly by its derivatives at both knots); toe off (its drawn pitch,
+    ``pitch_rate_toe_off``, ``pitch_accel_toe_off``). Derivatives not named are zero. Standing
+    stances at the start and end are level and still. The slap turns the foot toward level: toes down after a
+    heel strike, heel down after a forefoot strike."""
     n = plan.n_strides
     slap_rate = -impact.slap_rate if gait.forefoot_strike else impact.slap_rate
     strike = (gait.pitch_rate_heel_strike, gait.pitch_accel_heel_strike)
     toe_off = (gait.pitch_rate_toe_off, gait.pitch_accel_toe_off)
-    knots = [(0.0, 0.0, 0.0, 0.0)]
+    knots = [(0.0, 0.0, 0.0, 0.0, 0.0)]
     for k in range(n + 1):
+        flat = plan.t_ho[k] - plan.t_ff[k]
+        start, end = heel_rise_rates(micro, flat, plan.rate_scale[k, 0]) if plan.walking[k] else (0.0, 0.0)
+        jerk = 2.0 * (end - start) / flat**2  # third derivative of the cubic pitch
         if k > 0:
+            slap = impact.slap_duration_s
             knots += [
-                (plan.t_ic[k], plan.pitch_hs[k], *strike),
-                (plan.t_ff[k] - impact.slap_duration_s, -0.5 * slap_rate * impact.slap_duration_s, slap_rate, 0.0),
-                (plan.t_ff[k], 0.0, 0.0, 0.0),
+                (plan.t_ic[k], plan.pitch_hs[k], *strike, 0.0),
+                (plan.t_ff[k] - slap, -0.5 * (slap_rate + start) * slap, slap_rate, 0.0, 0.0),
+                (plan.t_ff[k], 0.0, start, 0.0, jerk),
             ]
         if k < n:
-            knots += [(plan.t_ho[k], 0.0, 0.0, 0.0), (plan.t_to[k], plan.pitch_to[k], *toe_off)]
-    knots.append((plan.t_end, 0.0, 0.0, 0.0))
+            knots += [(plan.t_ho[k], (start + (end - start) / 3.0) * flat, end, jerk * flat, jerk),
+                      (plan.t_to[k], plan.pitch_to[k], *toe_off, 0.0)]
+    knots.append((plan.t_end, 0.0, 0.0, 0.0, 0.0))
     kn = np.array(knots)
     keep = np.concatenate([[True], np.diff(kn[:, 0]) > 0])  # stance 0 starts at t = 0
     stacks = np.zeros((keep.sum(), smooth.NDER))
-    stacks[:, :3] = kn[keep, 1:]
+    stacks[:, :4] = kn[keep, 1:]
     return smooth.hermite(kn[keep, 0], stacks)
+
+
+class RollingSole:
+    """The foot's sagittal roll on level ground as a function of its pitch theta (rad, toes down positive).
+
+    The sole is a convex curve from the heel contact to the toe contact (``toe_length`` L apart on the foot's
+    x axis) that rolls on the ground without slipping. Its contact lies ``s'(theta)`` ahead of the heel point
+    (horizontally), where ``s(theta)`` is the heel point's height: s = 0 (heel on the ground) for theta up to
+    -b, s = L sin(theta) (toe on the ground) from +b, with b half of ``transfer_pitch``, and in between
+
+        s'(theta) = L sigma(theta) cos(theta),   sigma = SMOOTHSTEP((theta + b) / (2 b)),
+
+    so the contact moves from heel to toe as the foot pitches through +-b (the symmetric smoothstep puts the
+    toe exactly on the ground at +b: the integral of sigma cos over [-b, b] is sin b). Rolling without slip
+    moves the heel point forward by ``dX/dtheta = s + contact_radius``: the rolling centre sits
+    ``contact_radius`` below the sole (compliance), so the sole's ground contact slides forward at pitch rate
+    times that depth. On (-b, b) the cosine is its Taylor polynomial (degree ``TAYLOR_DEGREE``, exact to
+    round-off for any b below 0.5 rad), so s and X are polynomials in ``u = (theta + b) / (2 b)``, integrated
+    exactly and well conditioned; the joins at +-b are C4 (sigma's derivatives 1..4 vanish there).
+
+    Parameters
+    ----------
+    toe_length : m, heel-to-toe contact distance L.
+    transfer_pitch : rad, 2 b (> 0).
+    contact_radius : m, depth of the rolling centre below the sole.
+    """
+
+    TAYLOR_DEGREE = 24
+
+    def __init__(self, toe_length: float, transfer_pitch: float, contact_radius: float):
+        self.length, self.half, self.radius = float(toe_length), 0.5 * float(transfer_pitch), float(contact_radius)
+        b, span = self.half, float(transfer_pitch)
+        poly = np.polynomial.polynomial
+        # cos(theta) with theta = b (2 u - 1), as a polynomial in u
+        cos_u = np.zeros(1)
+        for n in range(0, self.TAYLOR_DEGREE + 1, 2):
+            term = poly.polypow([-b, 2 * b], n) * (-1) ** (n // 2) / math.factorial(n)
+            cos_u = poly.polyadd(cos_u, term)
+        slope = self.length * poly.polymul(smooth.SMOOTHSTEP, cos_u)  # s'(theta) in u
+        self._height = poly.polyint(slope) * span  # s in u (zero at u = 0: ds = s' dtheta = s' 2b du)
+        self._travel = poly.polyint(self._height) * span  # integral of s from -b, in u
+        # d^j/dtheta^j of s for j = 0..4, as polynomials in u (d/dtheta = d/du / 2b)
+        self._height_derivatives = [self._height, slope]
+        for _ in range(3):
+            self._height_derivatives.append(poly.polyder(self._height_derivatives[-1]) / span)
+        self._travel_end = float(poly.polyval(1.0, self._travel))
+        self._level = 0.0
+        self._level = float(self._stacks(np.zeros(1))[0][0, 0])  # heel travel of the level foot
+
+    def _stacks(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(5, N) each: the heel's forward travel X and height s (m) and their derivatives 1..4 with respect to
+        the pitch, at pitch ``theta`` (rad); X is zero for the level foot."""
+        theta = np.asarray(theta, float)
+        b, length = self.half, self.length
+        poly = np.polynomial.polynomial
+        travel = np.zeros((smooth.NDER, theta.size))
+        height = np.zeros((smooth.NDER, theta.size))
+        mid = (theta > -b) & (theta < b)
+        if mid.any():
+            u = (theta[mid] + b) / (2 * b)
+            height[:, mid] = [poly.polyval(u, c) for c in self._height_derivatives]
+            travel[0, mid] = poly.polyval(u, self._travel)
+        toe = theta >= b
+        if toe.any():
+            c, s = np.cos(theta[toe]), np.sin(theta[toe])
+            height[:, toe] = length * np.stack([s, c, -s, -c, s])
+            travel[0, toe] = self._travel_end + length * (np.cos(b) - c)
+        travel[1:] = height[:-1]
+        travel[0] += self.radius * theta - self._level
+        travel[1] += self.radius
+        return travel, height
+
+    def heel(self, pitch: np.ndarray) -> np.ndarray:
+        """(2, 5, N): forward travel X and height s (m) of the heel point relative to the level foot, with their
+        time derivatives 1..4, from the derivative stack ``pitch`` (5, N) of the foot's pitch (rad)."""
+        travel, height = self._stacks(pitch[0])
+        return np.stack([smooth.compose(travel, pitch), smooth.compose(height, pitch)])
+
+    def contact_offset(self, pitch: np.ndarray) -> np.ndarray:
+        """(N,) m: horizontal distance from the heel point forward to the ground contact at pitch (rad)."""
+        return self._stacks(np.asarray(pitch, float))[1][1]
+
+    def heel_height(self, pitch: np.ndarray) -> np.ndarray:
+        """(N,) m: height of the heel point above the ground contact at pitch (rad)."""
+        return self._stacks(np.asarray(pitch, float))[1][0]
 
 
 class FootTrajectory:
@@ -80,9 +188,10 @@ class FootTrajectory:
         self.foot_yaw = self.walk_yaw + g.toe_out
         self.frames = [_rot_z(y) for y in self.walk_yaw]
 
-        self.pitch = pitch_profile(plan, g, imp)
+        self.pitch = pitch_profile(plan, g, imp, mm)
+        self.sole = RollingSole(toe_length, mm.contact_transfer_pitch, mm.contact_radius_m)
 
-        # stance contact displacement (walking frame): heel-strike compression + micro-motion
+        # stance contact displacement (walking frame): heel-strike compression, impact ringing, creep
         v_hs = np.asarray(imp.heel_strike_velocity_mps, float)
         self.compression = v_hs * imp.heel_strike_duration_s / 2
         self.contact: list[list[list[smooth.Piecewise]]] = []  # [stance][axis] -> pieces
@@ -97,21 +206,13 @@ class FootTrajectory:
                             for t_event in (plan.t_ic[k], plan.t_ff[k])]
             if plan.walking[k] and mm.enabled:
                 for a in range(3):
-                    axes[a] += [
-                        smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s, mm.creep_velocity_mps[a]),
-                        smooth.pulse_displacement(plan.t_ff[k], mm.settle_duration_s, mm.settle_velocity_mps[a]),
-                        smooth.pulse_displacement(plan.t_ho[k] - mm.heel_off_duration_s / 2, mm.heel_off_duration_s,
-                                                  mm.heel_off_velocity_mps[a]),
-                    ]
+                    axes[a].append(smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
+                                                               mm.creep_velocity_mps[a]))
             self.contact.append(axes)
         self.rotation = self._build_stance_rotation()
         self.heel_base = [
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
-        ]
-        self._contact_at_heel_off = [self._contact_stack(k, np.array([plan.t_ho[k]]))[:, 0, :] for k in range(n)]
-        self._toe_at_heel_off = [
-            self._stance_heel(k, np.array([plan.t_ho[k]]))[:, 0, 0] + self._toe_vector(k) for k in range(n)
         ]
         self._swings = [self._build_swing(k) for k in range(n)]
         self.stance_roll = self._build_stance_roll()
@@ -133,49 +234,41 @@ class FootTrajectory:
         return smooth.hermite(np.array(knots), np.array(stacks, float))
 
     def _build_stance_rotation(self) -> dict | None:
-        """Sustained stance rotation per walking stance k: (roll, pitch, yaw) angle pieces (rad) of the rate
-        plateau inside foot flat, and the angles (3,) rad reached at heel off."""
+        """Roll and yaw of the foot flat per walking stance k: lists of angle pieces (rad) for roll (the
+        pronation held through foot flat and the loading pulse, a left foot's mirrored for a right one, plus
+        the sustained rotation's roll) and yaw (the sustained rotation's), and the (roll, yaw) angles reached
+        by heel off. (The sustained pitch is part of the heel rise: :func:`heel_rise_rates`.)"""
         plan, mm = self.plan, self.walk.micro
-        rates = np.asarray(mm.stance_rotation_rate, float)
-        if not (mm.enabled and np.any(rates) and plan.walking.any()):
+        mirror = -1.0 if mm.foot == "right" else 1.0
+        roll, yaw = np.asarray(mm.stance_rotation_rate, float)[[0, 2]]
+        if not (mm.enabled and (roll or yaw or mm.pronation_rate or mm.loading_roll_rate) and plan.walking.any()):
             return None
         ramp = mm.creep_ramp_s
-        return {int(k): ([smooth.plateau_displacement(plan.t_ff[k] + ramp, plan.t_ho[k] - ramp, ramp, r) for r in rates],
-                         rates * (plan.t_ho[k] - plan.t_ff[k] - ramp))
-                for k in np.flatnonzero(plan.walking)}
+        out = {}
+        for k in np.flatnonzero(plan.walking):
+            scale = mirror * plan.rate_scale[k, 1]
+            held = [smooth.plateau_displacement(plan.t_ff[k] + ramp, plan.t_ho[k] - ramp, ramp, rate)
+                    for rate in (roll + scale * mm.pronation_rate, yaw)]
+            loading = smooth.pulse_displacement(plan.t_ff[k] - self.walk.impact.slap_duration_s, mm.loading_duration_s,
+                                                scale * mm.loading_roll_rate)
+            pieces = ([held[0], loading], [held[1]])
+            out[int(k)] = (pieces, np.array([sum(p.after for p in axis) for axis in pieces]))
+        return out
 
     def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) stacks of stance k's sustained-rotation angles (roll, pitch, yaw), rad: zero before its foot
-        flat, rising through it, held through the push-off, returned to zero over the following swing."""
-        out = np.zeros((3, smooth.NDER, t.size))
+        """(2, 5, N) stacks of stance k's foot-flat (roll, yaw) angles, rad: zero before its foot flat, rising
+        through it, held through the push-off, returned to zero over the following swing."""
+        out = np.zeros((2, smooth.NDER, t.size))
         if self.rotation is None or k not in self.rotation:
             return out
         pieces, held = self.rotation[k]
         swing = self.plan.t_ic[k + 1] - self.plan.t_to[k]
-        for a in range(3):
-            out[a] = pieces[a].stack(t) + smooth.smoothstep_stack(t, self.plan.t_to[k], swing, 0.0, -held[a])
+        for a in range(2):
+            out[a] = sum(p.stack(t) for p in pieces[a]) + smooth.smoothstep_stack(t, self.plan.t_to[k], swing, 0.0,
+                                                                                  -held[a])
         return out
 
     # -- pieces ---------------------------------------------------------------------------------------------
-
-    @staticmethod
-    def _x_axis(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-        """(3, 5, N) stack of the foot's x axis in the world, (cos p cos y, cos p sin y, -sin p), from the
-        stacks of yaw and pitch (roll does not move it)."""
-        cos_y, sin_y = smooth.compose_trig(yaw)
-        cos_p, sin_p = smooth.compose_trig(pitch)
-        return np.stack([smooth.product(cos_p, cos_y), smooth.product(cos_p, sin_y), -sin_p])
-
-    def _held_angles(self, k: int) -> np.ndarray:
-        """(roll, pitch, yaw) rad of stance k's sustained rotation from heel off to toe off (zero without it)."""
-        return self.rotation[k][1] if self.rotation is not None and k in self.rotation else np.zeros(3)
-
-    def _toe_vector(self, k: int) -> np.ndarray:
-        """Heel-to-toe contact vector (m, world) at stance k's heel off."""
-        _, pitch, yaw = self._held_angles(k)
-        c = np.cos(pitch)
-        return self.toe_length * np.array([c * np.cos(self.foot_yaw[k] + yaw), c * np.sin(self.foot_yaw[k] + yaw),
-                                           -np.sin(pitch)])
 
     def _contact_stack(self, k: int, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement."""
@@ -186,47 +279,29 @@ class FootTrajectory:
         return np.einsum("ij,jdn->idn", self.frames[k], local)
 
     def _stance_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) heel point during [t_ic, t_ho] of stance k.
-
-        After a forefoot strike the foot turns about its toe contact until foot flat (the gait's pitch is zero
-        from there to heel off): heel += L (u0 - x_axis(pitch)), u0 the level heel-to-toe direction.
-
-        A sustained stance rotation first yaws the heel-toe line about the yaw pivot (a fraction f_y of the way
-        to the toe), turning its horizontal direction from u0 to u, then pitches it about the pitch pivot (f_p):
-        heel += L (f_y (u0 - u) + f_p (u - x_axis)), L the heel-toe length."""
+        """(3, 5, N) heel point during [t_ic, t_to] of stance k: the contact displacement plus the roll on the
+        sole along the foot's heading (:class:`RollingSole`); a sustained yaw turns that rolling offset about
+        the vertical through the yaw pivot (a point on the level foot's heel-toe line, carried by the contact
+        displacement)."""
         out = self._contact_stack(k, t)
         out[:, 0] += self.heel_base[k][:, None]
-        if self.walk.gait.forefoot_strike and k > 0:
-            yaw = np.zeros((smooth.NDER, t.size))
-            yaw[0] = self.foot_yaw[k]
-            level = self._x_axis(yaw, np.zeros_like(yaw))
-            out += self.toe_length * (level - self._x_axis(yaw, self.pitch.stack(t)))
+        travel, height = self.sole.heel(self.pitch.stack(t))
+        heading = np.array([np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k])])
+        rolled = heading[:, None, None] * travel
+        out[2] += height
         if self.rotation is not None and k in self.rotation:
-            _, pitch, yaw = self._rotation_of(k, t)
-            yaw[0] += self.foot_yaw[k]
-            u = self._x_axis(yaw, np.zeros_like(pitch))
-            u0 = np.zeros((3, smooth.NDER, 1))
-            u0[:, 0, 0] = np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k]), 0.0
-            f_pitch, f_yaw = self.walk.micro.stance_rotation_pivot_frac
-            out += self.toe_length * (f_yaw * (u0 - u) + f_pitch * (u - self._x_axis(yaw, pitch)))
-        return out
-
-    def _push_off_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) heel point during [t_ho, t_to]: rotation about the (micro-moving) toe contact."""
-        out = self._contact_stack(k, t)
-        out[:, 0] -= self._contact_at_heel_off[k]
-        _, held_pitch, held_yaw = self._held_angles(k)
-        pitch = self.pitch.stack(t)
-        pitch[0] += held_pitch
-        yaw = np.zeros_like(pitch)
-        yaw[0] = self.foot_yaw[k] + held_yaw
-        out -= self.toe_length * self._x_axis(yaw, pitch)
-        out[:, 0] += self._toe_at_heel_off[k][:, None]
+            arm = self.walk.micro.stance_yaw_pivot_frac * self.toe_length * heading
+            rolled[:, 0] -= arm[:, None]
+            cos_y, sin_y = smooth.compose_trig(self._rotation_of(k, t)[1])
+            rolled = np.stack([smooth.product(cos_y, rolled[0]) - smooth.product(sin_y, rolled[1]),
+                               smooth.product(sin_y, rolled[0]) + smooth.product(cos_y, rolled[1])])
+            rolled[:, 0] += arm[:, None]
+        out[:2] += rolled
         return out
 
     def _build_swing(self, k: int) -> list[smooth.Piecewise]:
         t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
-        start = self._push_off_heel(k, np.array([t0]))[:, :, 0]
+        start = self._stance_heel(k, np.array([t0]))[:, :, 0]
         end = self._stance_heel(k + 1, np.array([t1]))[:, :, 0]
         return [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
 
@@ -250,13 +325,10 @@ class FootTrajectory:
         plan = self.plan
         out = np.zeros((3, smooth.NDER, t.size))
         for k in range(plan.n_strides + 1):
-            m = (t >= plan.t_ic[k]) & (t < plan.t_ho[k]) if k < plan.n_strides else t >= plan.t_ic[k]
+            m = (t >= plan.t_ic[k]) & (t < plan.t_to[k]) if k < plan.n_strides else t >= plan.t_ic[k]
             if m.any():
                 out[:, :, m] = self._stance_heel(k, t[m])
             if k < plan.n_strides:
-                m = (t >= plan.t_ho[k]) & (t < plan.t_to[k])
-                if m.any():
-                    out[:, :, m] = self._push_off_heel(k, t[m])
                 m = (t >= plan.t_to[k]) & (t < plan.t_ic[k + 1])
                 if m.any():
                     out[:, :, m] = self._swing_heel(k, t[m])
@@ -277,9 +349,8 @@ class FootTrajectory:
         if self.stance_roll is not None:
             roll += self.stance_roll.stack(t)
         for k in (self.rotation or {}):
-            d_roll, d_pitch, d_yaw = self._rotation_of(k, t)
+            d_roll, d_yaw = self._rotation_of(k, t)
             roll += d_roll
-            pitch += d_pitch
             yaw += d_yaw
         return np.stack([yaw, pitch, roll])
 

@@ -148,6 +148,29 @@ def smoothstep_stack(t: np.ndarray, t0: float, duration: float, start: float, en
     return Piecewise(pp).stack(t)
 
 
+def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """Derivative stack of ``f(g(t))`` (Faà di Bruno to the 4th derivative).
+
+    Parameters
+    ----------
+    outer : (5, N) f and its derivatives 1..4 with respect to g, evaluated at ``g(t)``.
+    inner : (5, N) derivative stack of ``g`` (with respect to t).
+
+    Returns
+    -------
+    (5, N) derivative stack of ``f(g(t))``.
+    """
+    f0, f1, f2, f3, f4 = outer
+    _, g1, g2, g3, g4 = inner
+    return np.stack([
+        f0,
+        f1 * g1,
+        f2 * g1**2 + f1 * g2,
+        f3 * g1**3 + 3 * f2 * g1 * g2 + f1 * g3,
+        f4 * g1**4 + 6 * f3 * g1**2 * g2 + f2 * (4 * g1 * g3 + 3 * g2**2) + f1 * g4,
+    ])
+
+
 def compose_trig(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Derivative stacks of ``cos(theta(t))`` and ``sin(theta(t))`` from the stack of ``theta`` (Faà di Bruno).
 
@@ -159,21 +182,8 @@ def compose_trig(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     -------
     cos_stack, sin_stack : (5, N) each.
     """
-    th, t1, t2, t3, t4 = theta
-    c, s = np.cos(th), np.sin(th)
-
-    def chain(f0, f1, f2, f3, f4):
-        return np.stack(
-            [
-                f0,
-                f1 * t1,
-                f2 * t1**2 + f1 * t2,
-                f3 * t1**3 + 3 * f2 * t1 * t2 + f1 * t3,
-                f4 * t1**4 + 6 * f3 * t1**2 * t2 + f2 * (4 * t1 * t3 + 3 * t2**2) + f1 * t4,
-            ]
-        )
-
-    return chain(c, -s, -c, s, c), chain(s, c, -s, -c, s)
+    c, s = np.cos(theta[0]), np.sin(theta[0])
+    return compose(np.stack([c, -s, -c, s, c]), theta), compose(np.stack([s, c, -s, -c, s]), theta)
 
 
 def product(a: np.ndarray, b: np.ndarray) -> np.ndarray:

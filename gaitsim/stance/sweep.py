@@ -1,0 +1,294 @@
+"""The seed paper's Fig. 5 on any recording with a position track of its IMU site: per zero-velocity threshold,
+the detected windows, the mean velocity of the IMU site inside them and the stance-to-stance length
+underestimate of the shared filter, with bootstrap uncertainties over strides.
+
+Definitions (the same for a measured recording and its simulated twin):
+
+- The filter runs with :func:`nav_options` (SHOE, sigma_a 0.01 m/s^2, sigma_g 0.07 deg/s, window 3 samples,
+  9 states: the settings the issue measured real feet with) and the pipeline's mechanisation (default
+  automatic: RK4 on point samples, the exact increments of a simulated ideal sensor; the stance study runs
+  its twins through both, :mod:`gaitsim.stance.command`).
+- Detected stances: :func:`gaitsim.stance.events.group_stances` of the filter's zero-velocity flags, from the
+  filter's start on. *Walking stances* exclude the first and the last (the rests at the ends) and any longer
+  than ``MAX_STANCE_S``.
+- Length underestimate (%): ``100 (1 - sum |e_{s+1} - e_s| / sum |r_{s+1} - r_s|)`` over consecutive detected
+  stances, with e the solution's and r the track's horizontal position at each stance's middle sample:
+  independent of rotation, reflection and start alignment.
+- Window length (s): detected samples of a walking stance over the sample rate; reported as the mean over
+  walking stances.
+- In-window velocity (m/s): the track's forward displacement summed over the detected runs of the walking
+  stances over their summed durations, forward being the horizontal direction from the previous to the next
+  stance's middle.
+- Stance-velocity share of the underestimate: the filter is run a second time with the track's own velocity
+  as the stance pseudo-measurement (:func:`track_pseudo_velocity`: in each zero-velocity run, the track's
+  mean velocity over that run, in the walking frame, forward along the stride; the filter applies it along
+  its own heading, so a toe-out of a few degrees turns a few percent of it sideways). What that removes is the share the foot's motion inside
+  the windows causes; what remains comes from elsewhere (sensor errors, integration, the swing).
+- Uncertainty: bootstrap over strides, in blocks of ``BLOCK_STRIDES`` consecutive strides: an error in the
+  solution's position at one stance middle lengthens one step and shortens the next, so neighbouring steps
+  are anticorrelated and only whole runs of strides resample the sum's spread. The walk is cut into blocks at
+  every ``BLOCK_STRIDES``-th middle of the stances detected at the largest threshold; each step, stance and
+  window belongs to the block holding its start; ``BOOTSTRAP`` resamples of blocks (the same for every
+  threshold, seeded) give each curve's standard deviation, and the slope's (largest minus smallest
+  threshold) from the same draws.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nav import pipeline
+from nav.ekf import FilterConfig
+from nav.recording import Recording
+
+from .events import DetectedStances, group_stances
+
+THRESHOLDS = (1.0e4, 2.0e4, 3.0e4, 4.0e4, 5.0e4)
+SIGMA_A = 0.01  # m/s^2
+SIGMA_G = math.radians(0.07)  # rad/s
+WINDOW = 3  # samples
+STATES = 9
+MAX_STANCE_S = 2.0  # s, longer detected stances are rests, not steps
+BOOTSTRAP = 1000
+BOOTSTRAP_SEED = 11
+BLOCK_STRIDES = 4
+
+
+def nav_options(threshold: float, stance_velocity: np.ndarray | None = None, method: str = "auto") -> pipeline.NavOptions:
+    """The issue's filter settings at zero-velocity threshold ``threshold`` (dimensionless SHOE gamma), with an
+    optional per-sample stance pseudo-velocity (N, 3) m/s in the heading frame (default zero) and the
+    mechanisation ``method`` (:class:`nav.pipeline.NavOptions`: "auto", "rk4" or "increments")."""
+    return pipeline.NavOptions(detector="shoe", threshold=threshold, sigma_a=SIGMA_A, sigma_g=SIGMA_G,
+                               window=WINDOW, filter=FilterConfig(states=STATES), stance_velocity=stance_velocity,
+                               method=method)
+
+
+def _at(t_query: np.ndarray, t: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """(M, 3) positions of the finite rows of a track (t (N,) s, pos (N, 3) m) interpolated at ``t_query``."""
+    ok = np.all(np.isfinite(pos), axis=1)
+    return np.stack([np.interp(t_query, t[ok], pos[ok, i], left=np.nan, right=np.nan) for i in range(3)], -1)
+
+
+@dataclass
+class ThresholdResult:
+    """Everything one threshold gives on one recording (SI units).
+
+    Attributes
+    ----------
+    threshold : SHOE gamma.
+    stances : the detected stances from the filter's start on.
+    step_start : (S-1,) s, time of the first stance middle of each step.
+    step_estimate, step_track : (S-1,) m, horizontal distance between consecutive stance middles in the
+        solution and in the track (NaN where the track has none).
+    walking : (S,) bool, walking stances (module docstring).
+    stance_time : (S,) s, middle of each stance.
+    window : (S,) s, detected samples of each stance over the sample rate.
+    window_displacement : (S,) m, forward displacement of the track summed over the stance's detected runs.
+    window_duration : (S,) s, summed durations of those runs (first to last sample of each).
+    step_estimate_track_pseudo : (S-1,) m, as ``step_estimate`` with the track's velocity as the stance
+        pseudo-measurement.
+    """
+
+    threshold: float
+    stances: DetectedStances
+    step_start: np.ndarray
+    step_estimate: np.ndarray
+    step_track: np.ndarray
+    step_estimate_track_pseudo: np.ndarray
+    walking: np.ndarray
+    stance_time: np.ndarray
+    window: np.ndarray
+    window_displacement: np.ndarray
+    window_duration: np.ndarray
+
+    def underestimate_pct(self, steps: np.ndarray | None = None, track_pseudo: bool = False) -> float:
+        """Length underestimate (%) over the given steps (index array; default all with a track), of the
+        solution with zero or (``track_pseudo``) the track's velocity as stance pseudo-measurement."""
+        ok = np.isfinite(self.step_track)
+        idx = np.flatnonzero(ok) if steps is None else steps[ok[steps]]
+        estimate = self.step_estimate_track_pseudo if track_pseudo else self.step_estimate
+        return 100.0 * (1.0 - estimate[idx].sum() / self.step_track[idx].sum())
+
+    def in_window_velocity(self, stances: np.ndarray | None = None) -> float:
+        """m/s, duration-weighted mean forward velocity of the track in the walking stances' windows."""
+        ok = self.walking & np.isfinite(self.window_displacement)
+        idx = np.flatnonzero(ok) if stances is None else stances[ok[stances]]
+        return float(self.window_displacement[idx].sum() / self.window_duration[idx].sum())
+
+    def window_mean(self, stances: np.ndarray | None = None) -> float:
+        """s, mean detected window of the walking stances."""
+        idx = np.flatnonzero(self.walking) if stances is None else stances[self.walking[stances]]
+        return float(self.window[idx].mean())
+
+
+def _forward(middle_pos: np.ndarray) -> np.ndarray:
+    """(S, 2) horizontal unit vectors from each stance's previous to its next stance (one-sided at the ends)."""
+    xy = middle_pos[:, :2]
+    ahead = np.vstack([xy[1:], xy[-1:]])
+    behind = np.vstack([xy[:1], xy[:-1]])
+    d = ahead - behind
+    return d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+
+
+@dataclass
+class Windows:
+    """The detected stances of a recording and what its site track does inside them (SI units).
+
+    Attributes
+    ----------
+    stances : the detected stances (from the given start on).
+    stance_time : (S,) s, middle of each stance.   middle_pos : (S, 3) m, the track there.
+    walking : (S,) bool, walking stances (module docstring).
+    window : (S,) s, detected samples of each stance over the sample rate.
+    displacement : (S,) m, forward displacement of the track summed over the stance's detected runs.
+    duration : (S,) s, summed durations of those runs (first to last sample of each).
+    """
+
+    stances: DetectedStances
+    stance_time: np.ndarray
+    middle_pos: np.ndarray
+    walking: np.ndarray
+    window: np.ndarray
+    displacement: np.ndarray
+    duration: np.ndarray
+
+
+def windows(t: np.ndarray, stationary: np.ndarray, track_t: np.ndarray, track_pos: np.ndarray) -> Windows:
+    """Detected stances of zero-velocity flags ``stationary`` (N,) on the clock ``t`` (N,) s and the site
+    track (t (M,) s, pos (M, 3) m) inside them."""
+    stances = group_stances(t, stationary)
+    middles = t[stances.middles()]
+    ref = _at(middles, track_t, track_pos)
+    window = stances.detected_samples() / (1.0 / np.median(np.diff(t)))
+    walking = np.zeros(len(stances), bool)
+    walking[1:-1] = window[1:-1] <= MAX_STANCE_S
+    forward = _forward(ref) if len(stances) > 1 else np.zeros((len(stances), 2))
+    displacement = np.zeros(len(stances))
+    duration = np.zeros(len(stances))
+    for s, runs in enumerate(stances.runs):
+        ends = _at(t[runs[:, 1] - 1], track_t, track_pos)[:, :2] - _at(t[runs[:, 0]], track_t, track_pos)[:, :2]
+        displacement[s] = float(np.sum(ends @ forward[s]))
+        duration[s] = float(np.sum(t[runs[:, 1] - 1] - t[runs[:, 0]]))
+    return Windows(stances, middles, ref, walking, window, displacement, duration)
+
+
+def track_pseudo_velocity(t: np.ndarray, track_t: np.ndarray, track_pos: np.ndarray, w: Windows) -> np.ndarray:
+    """(N, 3) m/s on the clock ``t``: in every zero-velocity run of the detected stances, the track's mean
+    velocity over that run (end minus start position over its duration) in the stance's walking frame
+    (forward along its stride, left, up); zero elsewhere."""
+    out = np.zeros((len(t), 3))
+    forward = _forward(w.middle_pos)
+    for s, runs in enumerate(w.stances.runs):
+        u = forward[s]
+        for a, b in runs:
+            v = (_at(t[[b - 1]], track_t, track_pos) - _at(t[[a]], track_t, track_pos))[0] / (t[b - 1] - t[a])
+            if np.all(np.isfinite(v)):
+                out[a:b] = [v[0] * u[0] + v[1] * u[1], -v[0] * u[1] + v[1] * u[0], v[2]]
+    return out
+
+
+def _steps(sol, w: Windows) -> np.ndarray:
+    est = np.stack([np.interp(w.stance_time, sol.t, sol.pos[:, i]) for i in range(2)], -1)
+    return np.linalg.norm(np.diff(est, axis=0), axis=1)
+
+
+def run_threshold(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, threshold: float,
+                  method: str = "auto") -> ThresholdResult:
+    """Navigate ``rec`` at ``threshold`` (mechanisation ``method``) and measure it against the site track
+    (t (N,) s, pos (N, 3) m)."""
+    t = np.asarray(rec.t, float)
+    sol = pipeline.navigate(rec, nav_options(threshold, method=method))
+    stationary = np.asarray(sol.stationary, bool).copy()
+    stationary[:sol.start] = False
+    w = windows(t, stationary, track_t, track_pos)
+    with_track = pipeline.navigate(rec, nav_options(threshold, track_pseudo_velocity(t, track_t, track_pos, w), method))
+    return ThresholdResult(
+        threshold=float(threshold), stances=w.stances, step_start=w.stance_time[:-1], step_estimate=_steps(sol, w),
+        step_track=np.linalg.norm(np.diff(w.middle_pos[:, :2], axis=0), axis=1),
+        step_estimate_track_pseudo=_steps(with_track, w),
+        walking=w.walking, stance_time=w.stance_time, window=w.window, window_displacement=w.displacement,
+        window_duration=w.duration)
+
+
+@dataclass
+class Curve:
+    """One quantity against the threshold with its bootstrap standard deviation.
+
+    Attributes
+    ----------
+    value : (T,) the quantity at each threshold.
+    sd : (T,) bootstrap standard deviation.
+    slope : value at the largest minus at the smallest threshold.
+    slope_sd : its bootstrap standard deviation.
+    """
+
+    value: np.ndarray
+    sd: np.ndarray
+    slope: float
+    slope_sd: float
+
+    def as_dict(self) -> dict:
+        return {"value": self.value.tolist(), "sd": self.sd.tolist(), "slope": self.slope, "slope_sd": self.slope_sd}
+
+
+QUANTITIES = {
+    "underestimate_pct": lambda r, steps, stances: r.underestimate_pct(steps),
+    "underestimate_track_pseudo_pct": lambda r, steps, stances: r.underestimate_pct(steps, track_pseudo=True),
+    "stance_velocity_share_pct": lambda r, steps, stances: (r.underestimate_pct(steps)
+                                                            - r.underestimate_pct(steps, track_pseudo=True)),
+    "in_window_velocity_mps": lambda r, steps, stances: r.in_window_velocity(stances),
+    "window_s": lambda r, steps, stances: r.window_mean(stances),
+}
+
+
+@dataclass
+class Sweep:
+    """A recording's threshold sweep: the per-threshold results and the curves of :data:`QUANTITIES`."""
+
+    thresholds: np.ndarray
+    results: list
+    curves: dict
+    strides: int
+
+    def as_dict(self) -> dict:
+        return {"thresholds": self.thresholds.tolist(), "strides": self.strides,
+                **{name: curve.as_dict() for name, curve in self.curves.items()}}
+
+
+def _curve(values: np.ndarray, draws: np.ndarray) -> Curve:
+    return Curve(values, np.nanstd(draws, axis=0, ddof=1), float(values[-1] - values[0]),
+                 float(np.nanstd(draws[:, -1] - draws[:, 0], ddof=1)))
+
+
+def sweep(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds=THRESHOLDS,
+          bootstrap: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, method: str = "auto") -> Sweep:
+    """Threshold sweep of ``rec`` against its site track with bootstrap curves (module docstring), navigated
+    with the mechanisation ``method``."""
+    thresholds = np.asarray(sorted(thresholds), float)
+    results = [run_threshold(rec, track_t, track_pos, th, method) for th in thresholds]
+    edges = results[-1].stance_time[BLOCK_STRIDES::BLOCK_STRIDES]
+    blocks = len(edges) + 1
+
+    def members(times: np.ndarray) -> list[np.ndarray]:
+        block = np.searchsorted(edges, times, side="right")
+        return [np.flatnonzero(block == b) for b in range(blocks)]
+
+    step_members = [members(r.step_start) for r in results]
+    stance_members = [members(r.stance_time) for r in results]
+    rng = np.random.default_rng(seed)
+    picks = rng.integers(0, blocks, size=(bootstrap, blocks))
+    curves = {}
+    for name, quantity in QUANTITIES.items():
+        values = np.array([quantity(r, None, None) for r in results])
+        draws = np.full((bootstrap, len(results)), np.nan)
+        for b, pick in enumerate(picks):
+            for j, r in enumerate(results):
+                steps = np.concatenate([step_members[j][p] for p in pick])
+                stances = np.concatenate([stance_members[j][p] for p in pick])
+                if len(steps) and np.any(r.walking[stances]):
+                    draws[b, j] = quantity(r, steps, stances)
+        curves[name] = _curve(values, draws)
+    return Sweep(thresholds, results, curves, strides=int(np.sum(results[-1].walking)))
