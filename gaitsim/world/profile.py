@@ -215,6 +215,10 @@ class FootTrajectory:
             for k in range(n + 1)
         ]
         self._swings = [self._build_swing(k) for k in range(n)]
+        # swing turns of the foot: yaw to the next stance, roll bump
+        self._swing_yaw = [smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
+                                             self.foot_yaw[k + 1] - self.foot_yaw[k]) for k in range(n)]
+        self._swing_roll = [smooth.lift(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], g.swing_roll) for k in range(n)]
         self.stance_roll = self._build_stance_roll()
 
     def _build_stance_roll(self) -> smooth.Piecewise | None:
@@ -236,8 +240,9 @@ class FootTrajectory:
     def _build_stance_rotation(self) -> dict | None:
         """Roll and yaw of the foot flat per walking stance k: lists of angle pieces (rad) for roll (the
         pronation held through foot flat and the loading pulse, a left foot's mirrored for a right one, plus
-        the sustained rotation's roll) and yaw (the sustained rotation's), and the (roll, yaw) angles reached
-        by heel off. (The sustained pitch is part of the heel rise: :func:`heel_rise_rates`.)"""
+        the sustained rotation's roll) and yaw (the sustained rotation's), each ending with the return of the
+        angle reached by heel off to zero over the following swing. (The sustained pitch is part of the heel
+        rise: :func:`heel_rise_rates`.)"""
         plan, mm = self.plan, self.walk.micro
         mirror = -1.0 if mm.foot == "right" else 1.0
         roll, yaw = np.asarray(mm.stance_rotation_rate, float)[[0, 2]]
@@ -252,7 +257,10 @@ class FootTrajectory:
             loading = smooth.pulse_displacement(plan.t_ff[k] - self.walk.impact.slap_duration_s, mm.loading_duration_s,
                                                 scale * mm.loading_roll_rate)
             pieces = ([held[0], loading], [held[1]])
-            out[int(k)] = (pieces, np.array([sum(p.after for p in axis) for axis in pieces]))
+            swing = plan.t_ic[k + 1] - plan.t_to[k]
+            for axis in pieces:
+                axis.append(smooth.smoothstep(plan.t_to[k], swing, 0.0, -sum(p.after for p in axis)))
+            out[int(k)] = pieces
         return out
 
     def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
@@ -261,11 +269,8 @@ class FootTrajectory:
         out = np.zeros((2, smooth.NDER, t.size))
         if self.rotation is None or k not in self.rotation:
             return out
-        pieces, held = self.rotation[k]
-        swing = self.plan.t_ic[k + 1] - self.plan.t_to[k]
-        for a in range(2):
-            out[a] = sum(p.stack(t) for p in pieces[a]) + smooth.smoothstep_stack(t, self.plan.t_to[k], swing, 0.0,
-                                                                                  -held[a])
+        for a, pieces in enumerate(self.rotation[k]):
+            out[a] = sum(p.stack(t) for p in pieces)
         return out
 
     # -- pieces ---------------------------------------------------------------------------------------------
@@ -299,22 +304,25 @@ class FootTrajectory:
         out[:2] += rolled
         return out
 
-    def _build_swing(self, k: int) -> list[smooth.Piecewise]:
+    def _build_swing(self, k: int) -> tuple[list[smooth.Piecewise], smooth.Piecewise, smooth.Piecewise]:
+        """Swing k's heel-point Hermites (x, y, z) between the stances' ends, its lift (raising the mid-swing
+        heel to ``swing_height_m``) and its sideways excursion."""
+        g = self.walk.gait
         t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
         start = self._stance_heel(k, np.array([t0]))[:, :, 0]
         end = self._stance_heel(k + 1, np.array([t1]))[:, :, 0]
-        return [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
+        pieces = [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
+        z_mid = pieces[2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
+        return pieces, smooth.lift(t0, t1 - t0, g.swing_height_m - z_mid), smooth.lift(t0, t1 - t0, g.swing_lateral_m)
 
     def _swing_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        plan, g = self.plan, self.walk.gait
-        t0, t1 = plan.t_to[k], plan.t_ic[k + 1]
-        out = np.stack([p.stack(t) for p in self._swings[k]])
-        z_mid = self._swings[k][2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
-        out[2] += smooth.lift(t, t0, t1 - t0, g.swing_height_m - z_mid)
+        pieces, lift, side = self._swings[k]
+        out = np.stack([p.stack(t) for p in pieces])
+        out[2] += lift.stack(t)
         mid_yaw = 0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1])
-        side = smooth.lift(t, t0, t1 - t0, g.swing_lateral_m)
-        out[0] -= np.sin(mid_yaw) * side
-        out[1] += np.cos(mid_yaw) * side
+        lateral = side.stack(t)
+        out[0] -= np.sin(mid_yaw) * lateral
+        out[1] += np.cos(mid_yaw) * lateral
         return out
 
     # -- public ---------------------------------------------------------------------------------------------
@@ -337,22 +345,23 @@ class FootTrajectory:
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
         t = np.asarray(t, float)
-        plan, g = self.plan, self.walk.gait
-        yaw = np.zeros((smooth.NDER, t.size))
+        order = np.argsort(t, kind="stable")  # each piece is then evaluated on its window only
+        ts = t[order]
+        roll_yaw = np.zeros((2, smooth.NDER, t.size))
+        roll, yaw = roll_yaw
         yaw[0] = self.foot_yaw[0]
-        roll = np.zeros((smooth.NDER, t.size))
-        pitch = self.pitch.stack(t)
-        for k in range(plan.n_strides):
-            dur = plan.t_ic[k + 1] - plan.t_to[k]
-            yaw += smooth.smoothstep_stack(t, plan.t_to[k], dur, 0.0, self.foot_yaw[k + 1] - self.foot_yaw[k])
-            roll += smooth.lift(t, plan.t_to[k], dur, g.swing_roll)
+        for turn, bump in zip(self._swing_yaw, self._swing_roll):
+            smooth.accumulate(yaw, ts, turn.t0, turn.t1, turn.stack)
+            smooth.accumulate(roll, ts, bump.t0, bump.t1, bump.stack)
         if self.stance_roll is not None:
-            roll += self.stance_roll.stack(t)
-        for k in (self.rotation or {}):
-            d_roll, d_yaw = self._rotation_of(k, t)
-            roll += d_roll
-            yaw += d_yaw
-        return np.stack([yaw, pitch, roll])
+            smooth.accumulate(roll, ts, self.stance_roll.t0, self.stance_roll.t1, self.stance_roll.stack)
+        for k, pieces in (self.rotation or {}).items():
+            every = [p for axis in pieces for p in axis]
+            smooth.accumulate(roll_yaw, ts, min(p.t0 for p in every), max(p.t1 for p in every),
+                              lambda times, k=k: self._rotation_of(k, times))
+        out = np.empty((3, smooth.NDER, t.size))
+        out[:, :, order] = np.stack([yaw, self.pitch.stack(ts), roll])
+        return out
 
     def joints(self, t: np.ndarray) -> np.ndarray:
         """(6, 5, N) derivative stacks of the joints (x, y, z, yaw, pitch, roll) at times ``t`` (s)."""
