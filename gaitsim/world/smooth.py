@@ -40,13 +40,15 @@ class Piecewise:
         self.t1 = float(pp.x[-1])
         self.before = float(pp(self.t0))
         self.after = float(pp(self.t1))
-        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (5, k+1, m)
+        self._left = pp.x[:-1].copy()  # left end of each piece (s)
+        self._interior = pp.x[1:-1].copy()  # breakpoints between pieces (s)
+        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (k+1, 5, m)
         order = pp.c.shape[0]
         powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of pp.c
-        self._coef = np.zeros((NDER, order, pp.c.shape[1]))
-        self._coef[0] = pp.c
+        self._coef = np.zeros((order, NDER, pp.c.shape[1]))
+        self._coef[:, 0] = pp.c
         for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
-            self._coef[j, 1:] = (self._coef[j - 1] * powers)[:-1]
+            self._coef[1:, j] = (self._coef[:, j - 1] * powers)[:-1]
 
     def stack(self, t: np.ndarray) -> np.ndarray:
         """Derivative stack (5, N) at times ``t`` (s). Outside the range: held value, zero derivatives.
@@ -58,12 +60,13 @@ class Piecewise:
         inside = (t >= self.t0) & (t <= self.t1)
         if inside.any():
             ti = t[inside]
-            piece = np.clip(np.searchsorted(self.pp.x, ti, side="right") - 1, 0, len(self.pp.x) - 2)
-            local = ti - self.pp.x[piece]
-            coef = self._coef[:, :, piece]  # (5, k+1, n)
-            value = coef[:, 0]
-            for row in range(1, coef.shape[1]):
-                value = value * local + coef[:, row]
+            piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
+            local = ti - self._left[piece]
+            coef = self._coef[:, :, piece]  # (k+1, 5, n)
+            value = coef[0].copy()
+            for c in coef[1:]:
+                value *= local
+                value += c
             out[:, inside] = value
         out[0, t < self.t0] = self.before
         out[0, t > self.t1] = self.after
