@@ -129,6 +129,12 @@ class RollingSole:
         for _ in range(3):
             self._height_derivatives.append(poly.polyder(self._height_derivatives[-1]) / span)
         self._travel_end = float(poly.polyval(1.0, self._travel))
+        # the six polynomials (s, its derivatives 1..4, X) as rows, zero-padded at the top: one Horner pass
+        # of exactly numpy's polyval arithmetic (a zero top row keeps the running value +0)
+        rows = [*self._height_derivatives, self._travel]
+        self._rows = np.zeros((len(rows), max(len(c) for c in rows)))
+        for i, c in enumerate(rows):
+            self._rows[i, :len(c)] = c
         self._level = 0.0
         self._level = float(self._stacks(np.zeros(1))[0][0, 0])  # heel travel of the level foot
 
@@ -137,14 +143,16 @@ class RollingSole:
         the pitch, at pitch ``theta`` (rad); X is zero for the level foot."""
         theta = np.asarray(theta, float)
         b, length = self.half, self.length
-        poly = np.polynomial.polynomial
         travel = np.zeros((smooth.NDER, theta.size))
         height = np.zeros((smooth.NDER, theta.size))
         mid = (theta > -b) & (theta < b)
         if mid.any():
             u = (theta[mid] + b) / (2 * b)
-            height[:, mid] = [poly.polyval(u, c) for c in self._height_derivatives]
-            travel[0, mid] = poly.polyval(u, self._travel)
+            value = self._rows[:, -1:] + u * 0  # numpy.polynomial.polynomial.polyval on every row
+            for column in self._rows[:, -2::-1].T:
+                value = column[:, None] + value * u
+            height[:, mid] = value[:-1]
+            travel[0, mid] = value[-1]
         toe = theta >= b
         if toe.any():
             c, s = np.cos(theta[toe]), np.sin(theta[toe])
