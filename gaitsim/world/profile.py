@@ -222,7 +222,8 @@ class FootTrajectory:
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
         ]
-        self._swings = [self._build_swing(k) for k in range(n)]
+        ends = [self._stance_heel(k, np.array([plan.t_ic[k], plan.t_to[k]])) for k in range(n + 1)]  # (3, 5, 2)
+        self._swings = [self._build_swing(k, ends[k][:, :, 1], ends[k + 1][:, :, 0]) for k in range(n)]
         # swing turns of the foot: yaw to the next stance, roll bump
         self._swing_yaw = [smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
                                              self.foot_yaw[k + 1] - self.foot_yaw[k]) for k in range(n)]
@@ -312,13 +313,13 @@ class FootTrajectory:
         out[:2] += rolled
         return out
 
-    def _build_swing(self, k: int) -> tuple[list[smooth.Piecewise], smooth.Piecewise, smooth.Piecewise]:
-        """Swing k's heel-point Hermites (x, y, z) between the stances' ends, its lift (raising the mid-swing
-        heel to ``swing_height_m``) and its sideways excursion."""
+    def _build_swing(self, k: int, start: np.ndarray,
+                     end: np.ndarray) -> tuple[list[smooth.Piecewise], smooth.Piecewise, smooth.Piecewise]:
+        """Swing k's heel-point Hermites (x, y, z) from ``start`` (3, 5), the heel's derivative stacks at toe
+        off, to ``end`` (3, 5) at the next initial contact; its lift (raising the mid-swing heel to
+        ``swing_height_m``) and its sideways excursion."""
         g = self.walk.gait
         t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
-        start = self._stance_heel(k, np.array([t0]))[:, :, 0]
-        end = self._stance_heel(k + 1, np.array([t1]))[:, :, 0]
         pieces = [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
         z_mid = pieces[2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
         return pieces, smooth.lift(t0, t1 - t0, g.swing_height_m - z_mid), smooth.lift(t0, t1 - t0, g.swing_lateral_m)
@@ -387,4 +388,5 @@ class FootTrajectory:
         """(n+1, 3) m: exact displacement over foot flat [t_ff, t_ho] of the foot point ``lever_arm`` (m, foot
         frame; the IMU site's for the truth)."""
         p = self.plan
-        return self.point(p.t_ho, lever_arm) - self.point(p.t_ff, lever_arm)
+        ff, ho = np.split(self.point(np.concatenate([p.t_ff, p.t_ho]), lever_arm), 2)
+        return ho - ff
