@@ -429,3 +429,17 @@ def test_piecewise_stack_rows_equal_the_polynomial_derivatives():
     expected[1:, ~inside] = 0.0  # held value outside, zero derivatives
     expected[0, t < knots[0]], expected[0, t > knots[-1]] = piece.before, piece.after
     np.testing.assert_allclose(piece.stack(t), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+
+
+def test_accumulate_on_the_window_equals_adding_the_whole_stack_bit_for_bit():
+    rng = np.random.default_rng(3)
+    knots = np.cumsum(rng.uniform(0.01, 0.5, 6))
+    piece = smooth.hermite(knots, rng.normal(size=(6, 5)) * [1.0, 10.0, 1e2, 1e3, 1e4])
+    t = np.sort(np.concatenate([rng.uniform(knots[0] - 0.5, knots[-1] + 0.5, 300), knots[[0, -1]]]))
+    # samples on both sides, only before, only after, none outside
+    for times in (t, t[t < knots[2]], t[t > knots[3]], t[(t >= knots[0]) & (t <= knots[-1])]):
+        start = np.zeros((smooth.NDER, times.size))
+        start[0] = rng.normal(size=times.size)
+        expected = start + piece.stack(times)
+        smooth.accumulate(start, times, piece.t0, piece.t1, piece.stack)
+        assert np.array_equal(start, expected)

@@ -86,14 +86,16 @@ class FootModel:
     def sample(self, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray) -> SiteSamples:
         """Evaluate the IMU site's sensors at N prescribed states (each (N, 6): joints x, y, z, yaw, pitch, roll)."""
         m, d = self.model, self.data
-        n = len(qpos)
-        out = np.empty((n, m.nsensordata))
-        for k in range(n):
-            d.qpos[:] = qpos[k]
-            d.qvel[:] = qvel[k]
-            d.qacc[:] = qacc[k]
-            mujoco.mj_inverse(m, d)
-            out[k] = d.sensordata
+        out = np.empty((len(qpos), m.nsensordata))
+        # the per-sample loop is bound to MjData's own buffers (views), looked up once
+        pos, vel, acc, sensors, inverse = d.qpos, d.qvel, d.qacc, d.sensordata, mujoco.mj_inverse
+        for k, (p, v, a) in enumerate(zip(np.ascontiguousarray(qpos), np.ascontiguousarray(qvel),
+                                          np.ascontiguousarray(qacc))):
+            pos[:] = p
+            vel[:] = v
+            acc[:] = a
+            inverse(m, d)
+            out[k] = sensors
         s = self._slices
         q = out[:, s["quat"]]
         q = continuous_sign(q)

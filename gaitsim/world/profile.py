@@ -129,6 +129,12 @@ class RollingSole:
         for _ in range(3):
             self._height_derivatives.append(poly.polyder(self._height_derivatives[-1]) / span)
         self._travel_end = float(poly.polyval(1.0, self._travel))
+        # the six polynomials (s, its derivatives 1..4, X) as rows, zero-padded at the top: one Horner pass
+        # of exactly numpy's polyval arithmetic (a zero top row keeps the running value +0)
+        rows = [*self._height_derivatives, self._travel]
+        self._rows = np.zeros((len(rows), max(len(c) for c in rows)))
+        for i, c in enumerate(rows):
+            self._rows[i, :len(c)] = c
         self._level = 0.0
         self._level = float(self._stacks(np.zeros(1))[0][0, 0])  # heel travel of the level foot
 
@@ -137,14 +143,16 @@ class RollingSole:
         the pitch, at pitch ``theta`` (rad); X is zero for the level foot."""
         theta = np.asarray(theta, float)
         b, length = self.half, self.length
-        poly = np.polynomial.polynomial
         travel = np.zeros((smooth.NDER, theta.size))
         height = np.zeros((smooth.NDER, theta.size))
         mid = (theta > -b) & (theta < b)
         if mid.any():
             u = (theta[mid] + b) / (2 * b)
-            height[:, mid] = [poly.polyval(u, c) for c in self._height_derivatives]
-            travel[0, mid] = poly.polyval(u, self._travel)
+            value = self._rows[:, -1:] + u * 0  # numpy.polynomial.polynomial.polyval on every row
+            for column in self._rows[:, -2::-1].T:
+                value = column[:, None] + value * u
+            height[:, mid] = value[:-1]
+            travel[0, mid] = value[-1]
         toe = theta >= b
         if toe.any():
             c, s = np.cos(theta[toe]), np.sin(theta[toe])
@@ -214,7 +222,12 @@ class FootTrajectory:
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
         ]
-        self._swings = [self._build_swing(k) for k in range(n)]
+        ends = [self._stance_heel(k, np.array([plan.t_ic[k], plan.t_to[k]])) for k in range(n + 1)]  # (3, 5, 2)
+        self._swings = [self._build_swing(k, ends[k][:, :, 1], ends[k + 1][:, :, 0]) for k in range(n)]
+        # swing turns of the foot: yaw to the next stance, roll bump
+        self._swing_yaw = [smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
+                                             self.foot_yaw[k + 1] - self.foot_yaw[k]) for k in range(n)]
+        self._swing_roll = [smooth.lift(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], g.swing_roll) for k in range(n)]
         self.stance_roll = self._build_stance_roll()
 
     def _build_stance_roll(self) -> smooth.Piecewise | None:
@@ -236,8 +249,9 @@ class FootTrajectory:
     def _build_stance_rotation(self) -> dict | None:
         """Roll and yaw of the foot flat per walking stance k: lists of angle pieces (rad) for roll (the
         pronation held through foot flat and the loading pulse, a left foot's mirrored for a right one, plus
-        the sustained rotation's roll) and yaw (the sustained rotation's), and the (roll, yaw) angles reached
-        by heel off. (The sustained pitch is part of the heel rise: :func:`heel_rise_rates`.)"""
+        the sustained rotation's roll) and yaw (the sustained rotation's), each ending with the return of the
+        angle reached by heel off to zero over the following swing. (The sustained pitch is part of the heel
+        rise: :func:`heel_rise_rates`.)"""
         plan, mm = self.plan, self.walk.micro
         mirror = -1.0 if mm.foot == "right" else 1.0
         roll, yaw = np.asarray(mm.stance_rotation_rate, float)[[0, 2]]
@@ -252,7 +266,10 @@ class FootTrajectory:
             loading = smooth.pulse_displacement(plan.t_ff[k] - self.walk.impact.slap_duration_s, mm.loading_duration_s,
                                                 scale * mm.loading_roll_rate)
             pieces = ([held[0], loading], [held[1]])
-            out[int(k)] = (pieces, np.array([sum(p.after for p in axis) for axis in pieces]))
+            swing = plan.t_ic[k + 1] - plan.t_to[k]
+            for axis in pieces:
+                axis.append(smooth.smoothstep(plan.t_to[k], swing, 0.0, -sum(p.after for p in axis)))
+            out[int(k)] = pieces
         return out
 
     def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
@@ -261,11 +278,8 @@ class FootTrajectory:
         out = np.zeros((2, smooth.NDER, t.size))
         if self.rotation is None or k not in self.rotation:
             return out
-        pieces, held = self.rotation[k]
-        swing = self.plan.t_ic[k + 1] - self.plan.t_to[k]
-        for a in range(2):
-            out[a] = sum(p.stack(t) for p in pieces[a]) + smooth.smoothstep_stack(t, self.plan.t_to[k], swing, 0.0,
-                                                                                  -held[a])
+        for a, pieces in enumerate(self.rotation[k]):
+            out[a] = sum(p.stack(t) for p in pieces)
         return out
 
     # -- pieces ---------------------------------------------------------------------------------------------
@@ -299,22 +313,25 @@ class FootTrajectory:
         out[:2] += rolled
         return out
 
-    def _build_swing(self, k: int) -> list[smooth.Piecewise]:
+    def _build_swing(self, k: int, start: np.ndarray,
+                     end: np.ndarray) -> tuple[list[smooth.Piecewise], smooth.Piecewise, smooth.Piecewise]:
+        """Swing k's heel-point Hermites (x, y, z) from ``start`` (3, 5), the heel's derivative stacks at toe
+        off, to ``end`` (3, 5) at the next initial contact; its lift (raising the mid-swing heel to
+        ``swing_height_m``) and its sideways excursion."""
+        g = self.walk.gait
         t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
-        start = self._stance_heel(k, np.array([t0]))[:, :, 0]
-        end = self._stance_heel(k + 1, np.array([t1]))[:, :, 0]
-        return [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
+        pieces = [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
+        z_mid = pieces[2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
+        return pieces, smooth.lift(t0, t1 - t0, g.swing_height_m - z_mid), smooth.lift(t0, t1 - t0, g.swing_lateral_m)
 
     def _swing_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        plan, g = self.plan, self.walk.gait
-        t0, t1 = plan.t_to[k], plan.t_ic[k + 1]
-        out = np.stack([p.stack(t) for p in self._swings[k]])
-        z_mid = self._swings[k][2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
-        out[2] += smooth.lift(t, t0, t1 - t0, g.swing_height_m - z_mid)
+        pieces, lift, side = self._swings[k]
+        out = np.stack([p.stack(t) for p in pieces])
+        out[2] += lift.stack(t)
         mid_yaw = 0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1])
-        side = smooth.lift(t, t0, t1 - t0, g.swing_lateral_m)
-        out[0] -= np.sin(mid_yaw) * side
-        out[1] += np.cos(mid_yaw) * side
+        lateral = side.stack(t)
+        out[0] -= np.sin(mid_yaw) * lateral
+        out[1] += np.cos(mid_yaw) * lateral
         return out
 
     # -- public ---------------------------------------------------------------------------------------------
@@ -337,22 +354,23 @@ class FootTrajectory:
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
         t = np.asarray(t, float)
-        plan, g = self.plan, self.walk.gait
-        yaw = np.zeros((smooth.NDER, t.size))
+        order = np.argsort(t, kind="stable")  # each piece is then evaluated on its window only
+        ts = t[order]
+        roll_yaw = np.zeros((2, smooth.NDER, t.size))
+        roll, yaw = roll_yaw
         yaw[0] = self.foot_yaw[0]
-        roll = np.zeros((smooth.NDER, t.size))
-        pitch = self.pitch.stack(t)
-        for k in range(plan.n_strides):
-            dur = plan.t_ic[k + 1] - plan.t_to[k]
-            yaw += smooth.smoothstep_stack(t, plan.t_to[k], dur, 0.0, self.foot_yaw[k + 1] - self.foot_yaw[k])
-            roll += smooth.lift(t, plan.t_to[k], dur, g.swing_roll)
+        for turn, bump in zip(self._swing_yaw, self._swing_roll):
+            smooth.accumulate(yaw, ts, turn.t0, turn.t1, turn.stack)
+            smooth.accumulate(roll, ts, bump.t0, bump.t1, bump.stack)
         if self.stance_roll is not None:
-            roll += self.stance_roll.stack(t)
-        for k in (self.rotation or {}):
-            d_roll, d_yaw = self._rotation_of(k, t)
-            roll += d_roll
-            yaw += d_yaw
-        return np.stack([yaw, pitch, roll])
+            smooth.accumulate(roll, ts, self.stance_roll.t0, self.stance_roll.t1, self.stance_roll.stack)
+        for k, pieces in (self.rotation or {}).items():
+            every = [p for axis in pieces for p in axis]
+            smooth.accumulate(roll_yaw, ts, min(p.t0 for p in every), max(p.t1 for p in every),
+                              lambda times, k=k: self._rotation_of(k, times))
+        out = np.empty((3, smooth.NDER, t.size))
+        out[:, :, order] = np.stack([yaw, self.pitch.stack(ts), roll])
+        return out
 
     def joints(self, t: np.ndarray) -> np.ndarray:
         """(6, 5, N) derivative stacks of the joints (x, y, z, yaw, pitch, roll) at times ``t`` (s)."""
@@ -370,4 +388,5 @@ class FootTrajectory:
         """(n+1, 3) m: exact displacement over foot flat [t_ff, t_ho] of the foot point ``lever_arm`` (m, foot
         frame; the IMU site's for the truth)."""
         p = self.plan
-        return self.point(p.t_ho, lever_arm) - self.point(p.t_ff, lever_arm)
+        ff, ho = np.split(self.point(np.concatenate([p.t_ff, p.t_ho]), lever_arm), 2)
+        return ho - ff

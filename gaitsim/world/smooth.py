@@ -40,13 +40,15 @@ class Piecewise:
         self.t1 = float(pp.x[-1])
         self.before = float(pp(self.t0))
         self.after = float(pp(self.t1))
-        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (5, k+1, m)
+        self._left = pp.x[:-1].copy()  # left end of each piece (s)
+        self._interior = pp.x[1:-1].copy()  # breakpoints between pieces (s)
+        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (k+1, 5, m)
         order = pp.c.shape[0]
         powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of pp.c
-        self._coef = np.zeros((NDER, order, pp.c.shape[1]))
-        self._coef[0] = pp.c
+        self._coef = np.zeros((order, NDER, pp.c.shape[1]))
+        self._coef[:, 0] = pp.c
         for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
-            self._coef[j, 1:] = (self._coef[j - 1] * powers)[:-1]
+            self._coef[1:, j] = (self._coef[:, j - 1] * powers)[:-1]
 
     def stack(self, t: np.ndarray) -> np.ndarray:
         """Derivative stack (5, N) at times ``t`` (s). Outside the range: held value, zero derivatives.
@@ -58,16 +60,42 @@ class Piecewise:
         inside = (t >= self.t0) & (t <= self.t1)
         if inside.any():
             ti = t[inside]
-            piece = np.clip(np.searchsorted(self.pp.x, ti, side="right") - 1, 0, len(self.pp.x) - 2)
-            local = ti - self.pp.x[piece]
-            coef = self._coef[:, :, piece]  # (5, k+1, n)
-            value = coef[:, 0]
-            for row in range(1, coef.shape[1]):
-                value = value * local + coef[:, row]
+            piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
+            local = ti - self._left[piece]
+            coef = self._coef[:, :, piece]  # (k+1, 5, n)
+            value = coef[0].copy()
+            for c in coef[1:]:
+                value *= local
+                value += c
             out[:, inside] = value
         out[0, t < self.t0] = self.before
         out[0, t > self.t1] = self.after
         return out
+
+
+def accumulate(out: np.ndarray, t: np.ndarray, t0: float, t1: float, stack) -> None:
+    """``out += stack(t)`` in place, evaluating ``stack`` only on the samples in [t0, t1] and one on each side.
+
+    For a function held constant outside [t0, t1] (derivatives zero there), e.g. a :class:`Piecewise` or a sum
+    of them: each outside sample gets the same row-0 value added as its neighbour beyond the window, rows 1..4
+    outside are left alone. That equals ``out += stack(t)`` bit for bit whenever rows 1..4 of ``out`` hold no
+    -0.0 (adding +0.0 changes nothing else), as in any sum started from ``np.zeros``.
+
+    Parameters
+    ----------
+    out : (..., 5, N) derivative stacks, updated in place.
+    t : (N,) s, increasing sample times.
+    t0, t1 : s, the window outside which the function is constant.
+    stack : callable mapping (n,) times (s) to (..., 5, n) derivative stacks.
+    """
+    lo, hi = np.searchsorted(t, t0, side="left"), np.searchsorted(t, t1, side="right")
+    first, last = max(lo - 1, 0), min(hi + 1, t.size)
+    part = stack(t[first:last])
+    out[..., lo:hi] += part[..., lo - first:hi - first]
+    if lo > 0:
+        out[..., 0, :lo] += part[..., 0, :1]
+    if hi < t.size:
+        out[..., 0, hi:] += part[..., 0, -1:]
 
 
 def _hermite_tail() -> np.ndarray:
@@ -136,16 +164,16 @@ def plateau_displacement(t_up: float, t_down: float, ramp: float, velocity: floa
     return Piecewise(vel.antiderivative())
 
 
-def lift(t: np.ndarray, t0: float, duration: float, height: float) -> np.ndarray:
-    """Derivative stack (5, N) of ``height * LIFT((t - t0)/duration)``, zero outside the interval."""
-    return Piecewise(scaled_poly(LIFT, t0, duration, height)).stack(t)
+def lift(t0: float, duration: float, height: float) -> Piecewise:
+    """``height * LIFT((t - t0)/duration)`` (m or rad): a C4 bump over [t0, t0 + duration], zero outside."""
+    return Piecewise(scaled_poly(LIFT, t0, duration, height))
 
 
-def smoothstep_stack(t: np.ndarray, t0: float, duration: float, start: float, end: float) -> np.ndarray:
-    """Derivative stack of a C4 transition from ``start`` to ``end`` over [t0, t0 + duration]."""
+def smoothstep(t0: float, duration: float, start: float, end: float) -> Piecewise:
+    """A C4 transition from ``start`` to ``end`` over [t0, t0 + duration], held outside."""
     pp = scaled_poly(SMOOTHSTEP, t0, duration, end - start)
     pp.c[-1, 0] += start
-    return Piecewise(pp).stack(t)
+    return Piecewise(pp)
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -212,6 +240,8 @@ class Ringing:
         self.amp = accel / w**2
         self.period = 1.0 / freq_hz
         self.duration = max(np.log(100.0) / (zeta * w), 3 * self.period)
+        self.rise = smoothstep(t0, self.period, 0.0, 1.0)
+        self.fade = smoothstep(t0 + self.duration - self.period, self.period, 1.0, 0.0)
 
     def stack(self, t: np.ndarray) -> np.ndarray:
         t = np.asarray(t, float)
@@ -222,7 +252,5 @@ class Ringing:
         s = t[m] - self.t0
         e = np.exp(self.lam * s)
         osc = np.stack([(self.lam**n * e).imag for n in range(NDER)]) * self.amp
-        fade = smoothstep_stack(t[m], self.t0 + self.duration - self.period, self.period, 1.0, 0.0)
-        rise = smoothstep_stack(t[m], self.t0, self.period, 0.0, 1.0)
-        out[:, m] = product(product(rise, fade), osc)
+        out[:, m] = product(product(self.rise.stack(t[m]), self.fade.stack(t[m])), osc)
         return out
