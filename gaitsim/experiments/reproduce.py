@@ -111,6 +111,8 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
         "quick": quick, "runs": runs, "scenario": Path(scenario_path).name, "nav": dataclasses.asdict(nav),
         "experiment": dataclasses.asdict(exp), "stance_velocity_fit": stance_info,
         "compensation": {v: summarise_runs(main[v]) for v in main if "@" not in v and ":" not in v},
+        "headline_runs": {v: [{m: run[m] for m in (*report.METRICS, "heading_drift_deg_per_s")} for run in main[v]]
+                          for v in ("before", "both")},
         "threshold_sweep": {float(v.split("@")[1]): [s["along_track_error_m"] for s in main[v]]
                             for v in main if v.startswith("before@")},
         "predicted_loss": {float(k): v for k, v in predicted.items()},
