@@ -41,7 +41,7 @@ Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
   (200 deg/s toward level) are set so that the simulated peaks reach the published ones below (no measured
   running recording to fit). An earlier reversal of -25000 deg/s^2 at toe off made the push-off pitch dip
   below level (to -11 deg at 150 steps/min: the heel under the ground, an 80 g spike once the sole rolls);
-  without it the push-off pitch rises monotonically at every running cadence. The forefoot strike then
+  without it the push-off pitch stays above level at every running cadence (tests/test_gaits.py). The forefoot strike then
   peaks at ~1000-1100 deg/s, below the published ~1500 (a known miss: its swing turns back less than a
   rearfoot strike's, which lands at -15 deg);
   swing height 0.15 m; the stance micro-motion's ramps and pulses shortened to fit a ~0.06 s foot flat.

@@ -122,16 +122,16 @@ class RollingSole:
             term = poly.polypow([-b, 2 * b], n) * (-1) ** (n // 2) / math.factorial(n)
             cos_u = poly.polyadd(cos_u, term)
         slope = self.length * poly.polymul(smooth.SMOOTHSTEP, cos_u)  # s'(theta) in u
-        self._height = poly.polyint(slope) * span  # s in u (zero at u = 0: ds = s' dtheta = s' 2b du)
-        self._travel = poly.polyint(self._height) * span  # integral of s from -b, in u
+        height = poly.polyint(slope) * span  # s in u (zero at u = 0: ds = s' dtheta = s' 2b du)
+        travel = poly.polyint(height) * span  # integral of s from -b, in u
         # d^j/dtheta^j of s for j = 0..4, as polynomials in u (d/dtheta = d/du / 2b)
-        self._height_derivatives = [self._height, slope]
+        height_derivatives = [height, slope]
         for _ in range(3):
-            self._height_derivatives.append(poly.polyder(self._height_derivatives[-1]) / span)
-        self._travel_end = float(poly.polyval(1.0, self._travel))
+            height_derivatives.append(poly.polyder(height_derivatives[-1]) / span)
+        self._travel_end = float(poly.polyval(1.0, travel))
         # the six polynomials (s, its derivatives 1..4, X) as rows, zero-padded at the top: one Horner pass
         # of exactly numpy's polyval arithmetic (a zero top row keeps the running value +0)
-        rows = [*self._height_derivatives, self._travel]
+        rows = [*height_derivatives, travel]
         self._rows = np.zeros((len(rows), max(len(c) for c in rows)))
         for i, c in enumerate(rows):
             self._rows[i, :len(c)] = c
