@@ -15,7 +15,7 @@ import numpy as np
 from nav.closure import StrideClosure, stride_closure
 
 
-def _middle_thirds(stances: np.ndarray) -> np.ndarray:
+def middle_thirds(stances: np.ndarray) -> np.ndarray:
     """(n, 2) sample indices [start, end) of the middle third of each stance [start, end) (the whole stance when
     it is shorter than 6 samples)."""
     stances = np.asarray(stances).reshape(-1, 2)
@@ -41,7 +41,7 @@ def closure_between_stances(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, sta
     StrideClosure: velocity (n, 3) m/s forward, left, up; tilt (n, 3) rad, of which x and y are the tilt about the
     sensor's axes at the next stance.
     """
-    first, last = _middle_thirds(stances), _middle_thirds(next_stances)
+    first, last = middle_thirds(stances), middle_thirds(next_stances)
     return stride_closure(t, acc, gyr, first, first.sum(axis=1) // 2, last, last, gravity, gyro_bias)
 
 

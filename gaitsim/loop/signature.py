@@ -59,7 +59,7 @@ from nav.constants import DEFAULT_GRAVITY
 from nav.series import resample
 
 from . import settings
-from .closure import closure_between_stances, following
+from .closure import closure_between_stances, following, middle_thirds
 from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
@@ -258,8 +258,7 @@ def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat
                        stance: np.ndarray) -> dict:
     """The stance statistics of one stride (module docstring) over its detected stance [c0, c1)."""
     c0, c1 = stance
-    third = (c1 - c0) // 3
-    core = slice(c0 + third, c1 - third) if c1 - c0 >= 6 else slice(c0, c1)
+    core = slice(*middle_thirds(stance)[0])
     rates = np.degrees(gyr[core].mean(0))
     inside = log_stat[c0:min(c1, len(log_stat))]
     return {"stance_gyro": np.degrees(np.linalg.norm(gyr[core], axis=1).mean()),
