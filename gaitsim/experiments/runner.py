@@ -392,7 +392,7 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
 
 def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
     """A local pool of ``workers`` processes under the runner's rules: never forked from a parent holding numba or
-    MuJoCo state, one numba thread each, none outliving the process that started it."""
+    MuJoCo state, one numba and one BLAS thread each, none outliving the process that started it."""
     return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(
         _start_method()), initializer=_start_worker, initargs=(os.getpid(),))
 

@@ -35,7 +35,7 @@ from . import fit as stance_fit
 from . import report
 from .profiles import foot_flat_profiles
 from .sweep import BOOTSTRAP, Sweep, sweep
-from .twin import TwinSpec, match_timing, measure_gait, simulate, timing_report
+from .twin import TwinSpec, match_timing, measure_gait, simulate_sensed_and_ideal, timing_report
 
 DATASETS = ("gaitmap-healthy", "ucr-fgo")
 # dataset -> (the IMU site on the simulator's foot as a [mount] table, whether the reference track is that site)
@@ -138,8 +138,7 @@ def study_recording(rec: Recording, site: dict, site_track: bool, sensor: dict, 
     gait = measure_gait(rec, ref.t, ref.pos)
     spec = TwinSpec(mount=site, micromotion={"foot": rec.meta["recording"], **(micromotion or {})}, sensor=sensor)
     doc = match_timing(gait, spec)
-    ideal_doc = {key: value for key, value in doc.items() if key != "sensor"}
-    twins = {True: simulate(doc), False: simulate(ideal_doc)}  # the same truth (gait and sensor draws are apart)
+    twins = dict(zip((True, False), simulate_sensed_and_ideal(doc)))  # one truth, two sensors
     sweeps = {"real": sweep(rec, ref.t, ref.pos, bootstrap=bootstrap)}
     for name, (sensed, method) in TWIN_PATHS.items():
         twin = twins[sensed]

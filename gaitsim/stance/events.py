@@ -67,7 +67,8 @@ def group_stances(t: np.ndarray, stationary: np.ndarray, merge_gap_s: float = ME
 
 @dataclass
 class GaitEvents:
-    """Initial contact and toe off around each detected stance (sample indices; -1 where not found).
+    """Initial contact, forefoot contact, heel off and toe off around each detected stance (sample indices; -1
+    where not found).
 
     Attributes
     ----------
@@ -99,7 +100,7 @@ def _crossing(rate: np.ndarray, lo: int, hi: int, upward: bool) -> int:
 
 
 def gait_events(gyr: np.ndarray, stances: DetectedStances) -> GaitEvents:
-    """IC and TO of every detected stance from the sagittal rate ``gyr[:, 1]`` (rad/s); see the module docstring.
+    """IC, FF, HO and TO of every detected stance from the sagittal rate ``gyr[:, 1]`` (rad/s); see the module docstring.
 
     The first stance has no IC unless a swing precedes it, the last no TO unless one follows it."""
     rate = np.asarray(gyr, float)[:, 1]

@@ -27,8 +27,8 @@ Definitions (the same for a measured recording and its simulated twin):
 - Uncertainty: bootstrap over strides, in blocks of ``BLOCK_STRIDES`` consecutive strides: an error in the
   solution's position at one stance middle lengthens one step and shortens the next, so neighbouring steps
   are anticorrelated and only whole runs of strides resample the sum's spread. The walk is cut into blocks at
-  every ``BLOCK_STRIDES``-th middle of the stances detected at the largest threshold; each step, stance and
-  window belongs to the block holding its start; ``BOOTSTRAP`` resamples of blocks (the same for every
+  every ``BLOCK_STRIDES``-th middle of the stances detected at the largest threshold; each step and window
+  belongs to the block holding its start, each stance to the block holding its middle; ``BOOTSTRAP`` resamples of blocks (the same for every
   threshold, seeded) give each curve's standard deviation, and the slope's (largest minus smallest
   threshold) from the same draws.
 """

@@ -15,7 +15,7 @@ sensor (ideal or of the recording's class) and the simulator's default stance mo
 - the sample rate, and the number of strides (a straight walk of that many strides).
 
 The IMU site on the foot is an input (:class:`TwinSpec`), not fitted here: one of the simulator's named
-mounts, or a measured offset (gaitmap: from the Vicon pose, :mod:`gaitsim.stance.profiles`).
+mounts, or a measured offset (gaitmap: from the Vicon pose, :data:`gaitsim.stance.command.SITES`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from nav.recording import Recording
 from ..world.gait import GaitParams
 from ..ranges import RANGES
 from ..scenario import scenario_from_dict
-from ..simulate import simulate_walk
+from ..simulate import sense, simulate_walk, simulate_world
 from .events import gait_events, group_stances
 from .sweep import SIGMA_A, SIGMA_G, THRESHOLDS, WINDOW
 
@@ -50,7 +50,8 @@ class GaitSummary:
     ----------
     stride_period_s : s.   stride_length_m : m.
     heel_rocker_s, foot_flat_s, push_off_s : s, median event-to-event durations.
-    strides : number of steady strides the medians came from.   rate_hz : Hz, median sample rate.
+    strides : number of steady strides the stride-period median came from (the phase medians use every
+        complete stance, the stride length every walking step).   rate_hz : Hz, median sample rate.
     """
 
     stride_period_s: float
@@ -131,6 +132,14 @@ def twin_document(gait: GaitSummary, foot_flat_frac: float, spec: TwinSpec = Twi
 def simulate(doc: dict) -> Recording:
     """Simulate a twin document (its truth is the site track)."""
     return simulate_walk(scenario_from_dict(doc, "<stance twin>"), seed=TWIN_SEED)
+
+
+def simulate_sensed_and_ideal(doc: dict) -> tuple[Recording, Recording]:
+    """The twin document's walk simulated once and read by its [sensor] and by the ideal sensor: the recordings
+    :func:`simulate` gives for the document with and without its [sensor] table."""
+    scenario = scenario_from_dict(doc, "<stance twin>")
+    world = simulate_world(scenario, TWIN_SEED)
+    return sense(*world, scenario.sensor, TWIN_SEED), sense(*world, None, TWIN_SEED)
 
 
 def match_timing(gait: GaitSummary, spec: TwinSpec = TwinSpec()) -> dict:
