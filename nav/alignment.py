@@ -47,6 +47,24 @@ def stationary_runs(stationary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
+def merged_runs(t: np.ndarray, stationary: np.ndarray, gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The runs of True in ``stationary`` (N,) bool, merged where one starts less than ``gap_s`` (s) after the
+    last sample of the one before on the clock ``t`` (N,) s: a stance the detector broke into pieces.
+
+    Returns
+    -------
+    bounds : (m, 2) int, sample indices [start, end) of each merged group.
+    runs : (n, 2) int, sample indices [start, end) of every run.
+    group : (n,) int, the group of each run.
+    """
+    starts, ends = stationary_runs(stationary)
+    t = np.asarray(t, float)
+    new = np.concatenate([[True], t[starts[1:]] - t[ends[:-1] - 1] >= gap_s])[:len(starts)]
+    group = np.cumsum(new) - 1
+    last = np.concatenate([new[1:], [True]])[:len(starts)]
+    return np.column_stack([starts[new], ends[last]]), np.column_stack([starts, ends]), group
+
+
 def first_stationary_window(stationary: np.ndarray, min_samples: int = DEFAULT_MIN_SAMPLES) -> tuple[int, int]:
     """(start, end) of the first run of at least ``min_samples`` stationary samples.
 

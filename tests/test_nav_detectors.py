@@ -127,3 +127,16 @@ def test_gaitmap_default_threshold_lands_near_openshoe_walking_values():
     assert 2.5e4 < conv.threshold < 3.5e4
     pyshoe = D.convert_threshold(3e4, D.openshoe_convention(), D.pyshoe_convention())
     assert pyshoe.threshold == pytest.approx(3e4) and not pyshoe.exact  # same sigmas, different windows
+
+
+def test_runs_closer_than_the_gap_merge_into_one_stance():
+    from nav.alignment import merged_runs
+
+    t = np.arange(20) * 0.01
+    stationary = np.zeros(20, bool)
+    stationary[[2, 3, 5, 6, 12, 13]] = True  # runs [2, 4), [5, 7), [12, 14): 0.02 s and 0.06 s apart
+    bounds, runs, group = merged_runs(t, stationary, 0.03)
+    np.testing.assert_array_equal(bounds, [[2, 7], [12, 14]])
+    np.testing.assert_array_equal(runs, [[2, 4], [5, 7], [12, 14]])
+    np.testing.assert_array_equal(group, [0, 0, 1])
+    assert merged_runs(t, np.zeros(20, bool), 0.03)[0].shape == (0, 2)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nav.alignment import stationary_runs
+from nav.alignment import merged_runs
 from nav.series import resample
 
 from . import settings
@@ -20,16 +20,7 @@ from . import settings
 def stance_intervals(t: np.ndarray, stationary: np.ndarray) -> np.ndarray:
     """(m, 2) sample indices [start, end) of detected stances after merging gaps < ``settings.MERGE_GAP_S`` and
     dropping runs shorter than ``settings.MIN_STANCE_S``; ``t`` in s."""
-    starts, ends = stationary_runs(stationary)
-    if len(starts) == 0:
-        return np.empty((0, 2), int)
-    merged = [[starts[0], ends[0]]]
-    for s, e in zip(starts[1:], ends[1:]):
-        if t[s] - t[merged[-1][1] - 1] < settings.MERGE_GAP_S:
-            merged[-1][1] = e
-        else:
-            merged.append([s, e])
-    out = np.array(merged, int)
+    out = merged_runs(t, stationary, settings.MERGE_GAP_S)[0]
     keep = t[out[:, 1] - 1] - t[out[:, 0]] >= settings.MIN_STANCE_S
     return out[keep]
 

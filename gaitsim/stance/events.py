@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nav.alignment import stationary_runs
+from nav.alignment import merged_runs
 
 MERGE_GAP_S = 0.15  # s, shorter gaps between zero-velocity runs lie inside one stance (a swing lasts > 0.25 s)
 MIN_SWING_RATE = np.deg2rad(50.0)  # rad/s, a swing's sagittal rate reaches below minus this
@@ -53,16 +53,8 @@ class DetectedStances:
 
 def group_stances(t: np.ndarray, stationary: np.ndarray, merge_gap_s: float = MERGE_GAP_S) -> DetectedStances:
     """Group the zero-velocity runs of ``stationary`` (N,) bool on the clock ``t`` (N,) s into stances."""
-    starts, ends = stationary_runs(stationary)
-    bounds, runs = [], []
-    for s, e in zip(starts, ends):
-        if bounds and t[s] - t[bounds[-1][1] - 1] < merge_gap_s:
-            bounds[-1][1] = e
-            runs[-1].append((s, e))
-        else:
-            bounds.append([s, e])
-            runs.append([(s, e)])
-    return DetectedStances(np.array(bounds, int).reshape(-1, 2), [np.array(r, int) for r in runs])
+    bounds, runs, group = merged_runs(t, stationary, merge_gap_s)
+    return DetectedStances(bounds, [runs[group == g] for g in range(len(bounds))])
 
 
 @dataclass
