@@ -47,7 +47,13 @@ def normalised_stance_time(stationary: np.ndarray) -> np.ndarray:
 def to_heading_frame(vel_world: np.ndarray, quat: np.ndarray) -> np.ndarray:
     """World velocities (..., 3) m/s rotated into the heading frame of attitudes quat (..., 4)."""
     yaw = yaw_of(quat)
-    c, s = np.cos(yaw), np.sin(yaw)
+    return rotate_to_heading(vel_world, np.cos(yaw), np.sin(yaw))
+
+
+def rotate_to_heading(vel_world: np.ndarray, cos_yaw, sin_yaw) -> np.ndarray:
+    """World vectors (..., 3) in the frame (forward, left, up) of a heading given by its cosine and sine (the
+    unit horizontal forward vector (cos_yaw, sin_yaw), scalars or broadcastable to (...))."""
+    c, s = cos_yaw, sin_yaw
     v = np.asarray(vel_world, float)
     return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]], axis=-1)
 

@@ -43,6 +43,7 @@ import numpy as np
 from nav import pipeline
 from nav.ekf import FilterConfig
 from nav.recording import Recording
+from nav.zupt_velocity import rotate_to_heading
 
 from .events import DetectedStances, group_stances
 
@@ -186,7 +187,7 @@ def track_pseudo_velocity(t: np.ndarray, track_t: np.ndarray, track_pos: np.ndar
         for a, b in runs:
             v = (_at(t[[b - 1]], track_t, track_pos) - _at(t[[a]], track_t, track_pos))[0] / (t[b - 1] - t[a])
             if np.all(np.isfinite(v)):
-                out[a:b] = [v[0] * u[0] + v[1] * u[1], -v[0] * u[1] + v[1] * u[0], v[2]]
+                out[a:b] = rotate_to_heading(v, u[0], u[1])
     return out
 
 
