@@ -20,7 +20,7 @@ import numpy as np
 from nav import detectors
 from nav.recording import Recording
 
-from .events import gait_events, group_stances
+from .events import DetectedStances, GaitEvents, gait_events, group_stances
 from .sweep import SIGMA_A, SIGMA_G, THRESHOLDS, WINDOW
 
 POINTS = 29
@@ -64,13 +64,19 @@ class Profiles:
                 "spread": {k: v.tolist() for k, v in self.spread.items()}}
 
 
+def detected_gait(rec: Recording) -> tuple[detectors.DetectorResult, DetectedStances, GaitEvents]:
+    """SHOE at the sweep's largest threshold on ``rec``, its stances and their gait events: what the foot-flat
+    profiles and the twin's timing (:mod:`gaitsim.stance.twin`) both read the gait from."""
+    t = np.asarray(rec.t, float)
+    result = detectors.detect("shoe", t, rec.acc, rec.gyr, max(THRESHOLDS), SIGMA_A, SIGMA_G, WINDOW)
+    stances = group_stances(t, result.stationary)
+    return result, stances, gait_events(rec.gyr, stances)
+
+
 def foot_flat_profiles(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray) -> Profiles:
     """Foot-flat profiles of ``rec`` with its site track (t (M,) s, pos (M, 3) m)."""
     t = np.asarray(rec.t, float)
-    threshold = max(THRESHOLDS)
-    result = detectors.detect("shoe", t, rec.acc, rec.gyr, threshold, SIGMA_A, SIGMA_G, WINDOW)
-    stances = group_stances(t, result.stationary)
-    events = gait_events(rec.gyr, stances)
+    result, stances, events = detected_gait(rec)
     middles = stances.middles()
     velocity = site_velocity(track_t, track_pos)
     centres = np.stack([np.interp(t[middles], track_t, track_pos[:, i]) for i in range(2)], -1)

@@ -25,15 +25,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nav import detectors
 from nav.recording import Recording
 
 from ..world.gait import GaitParams
 from ..ranges import RANGES
 from ..scenario import scenario_from_dict
 from ..simulate import sense, simulate_walk, simulate_world
-from .events import gait_events, group_stances
-from .sweep import SIGMA_A, SIGMA_G, THRESHOLDS, WINDOW
+from .profiles import detected_gait
 
 TWIN_SEED = 5
 MIN_STRIDES = 8
@@ -69,9 +67,7 @@ class GaitSummary:
 def _phase_durations(rec: Recording) -> tuple[dict, np.ndarray, object]:
     """Median durations (s) of the stance phases, the stride periods (s) and the detected stances of ``rec``."""
     t = np.asarray(rec.t, float)
-    stationary = detectors.detect("shoe", t, rec.acc, rec.gyr, max(THRESHOLDS), SIGMA_A, SIGMA_G, WINDOW).stationary
-    stances = group_stances(t, stationary)
-    ev = gait_events(rec.gyr, stances)
+    _, stances, ev = detected_gait(rec)
     ok = ev.complete()
     durations = {"heel_rocker": float(np.median(t[ev.ff[ok]] - t[ev.ic[ok]])),
                  "foot_flat": float(np.median(t[ev.ho[ok]] - t[ev.ff[ok]])),
