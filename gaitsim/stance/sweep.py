@@ -281,14 +281,16 @@ def sweep(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds
     stance_members = [members(r.stance_time) for r in results]
     rng = np.random.default_rng(seed)
     picks = rng.integers(0, blocks, size=(bootstrap, blocks))
+    # the steps and stances of every resample at every threshold, drawn once for all quantities
+    resamples = [[(np.concatenate([step_members[j][p] for p in pick]),
+                   np.concatenate([stance_members[j][p] for p in pick])) for j in range(len(results))]
+                 for pick in picks]
     curves = {}
     for name, quantity in QUANTITIES.items():
         values = np.array([quantity(r, None, None) for r in results])
         draws = np.full((bootstrap, len(results)), np.nan)
-        for b, pick in enumerate(picks):
-            for j, r in enumerate(results):
-                steps = np.concatenate([step_members[j][p] for p in pick])
-                stances = np.concatenate([stance_members[j][p] for p in pick])
+        for b, drawn in enumerate(resamples):
+            for j, (r, (steps, stances)) in enumerate(zip(results, drawn)):
                 if len(steps) and np.any(r.walking[stances]):
                     draws[b, j] = quantity(r, steps, stances)
         curves[name] = _curve(values, draws)
