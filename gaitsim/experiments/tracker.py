@@ -16,6 +16,7 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
 from nav.recording import Truth
+from nav.series import resample
 
 
 @dataclass(frozen=True)
@@ -85,4 +86,4 @@ def velocity_within(tracked: Track, t: np.ndarray) -> np.ndarray | None:
     inner[1:-1] = (tracked.t[:-2] >= t[0]) & (tracked.t[2:] <= t[-1])
     if not inner.any():
         return None
-    return np.column_stack([np.interp(t, tracked.t[inner], tracked.vel[inner, i]) for i in range(3)])
+    return resample(t, tracked.t[inner], tracked.vel[inner])

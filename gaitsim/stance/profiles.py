@@ -19,6 +19,7 @@ import numpy as np
 
 from nav import detectors
 from nav.recording import Recording
+from nav.series import resample
 
 from .events import DetectedStances, GaitEvents, gait_events, group_stances
 from .sweep import SIGMA_A, SIGMA_G, THRESHOLDS, WINDOW
@@ -79,7 +80,7 @@ def foot_flat_profiles(rec: Recording, track_t: np.ndarray, track_pos: np.ndarra
     result, stances, events = detected_gait(rec)
     middles = stances.middles()
     velocity = site_velocity(track_t, track_pos)
-    centres = np.stack([np.interp(t[middles], track_t, track_pos[:, i]) for i in range(2)], -1)
+    centres = resample(t[middles], track_t, track_pos[:, :2])
     shoe = np.full(len(t), np.nan)
     shoe[:len(result.statistic)] = np.log10(np.maximum(result.statistic, 1e-12))
     channels = {"rate_dps": np.degrees(np.linalg.norm(rec.gyr, axis=1)), "sagittal_rate_dps": np.degrees(rec.gyr[:, 1]),
@@ -97,7 +98,7 @@ def foot_flat_profiles(rec: Recording, track_t: np.ndarray, track_pos: np.ndarra
         durations.append(t_ho - t_ff)
         for name, values in channels.items():
             rows[name].append(np.interp(at, t, values))
-        v = np.stack([np.interp(at, track_t, velocity[:, i]) for i in range(3)], -1)
+        v = resample(at, track_t, velocity)
         rows["forward_velocity_mps"].append(v[:, :2] @ forward)
         rows["vertical_velocity_mps"].append(v[:, 2])
     median, spread = {}, {}

@@ -44,6 +44,7 @@ from nav import pipeline
 from nav.ekf import FilterConfig
 from nav.recording import Recording
 from nav.zupt_velocity import rotate_to_heading
+from nav.series import resample
 
 from .events import DetectedStances, group_stances
 
@@ -192,7 +193,7 @@ def track_pseudo_velocity(t: np.ndarray, track_t: np.ndarray, track_pos: np.ndar
 
 
 def _steps(sol, w: Windows) -> np.ndarray:
-    est = np.stack([np.interp(w.stance_time, sol.t, sol.pos[:, i]) for i in range(2)], -1)
+    est = resample(w.stance_time, sol.t, sol.pos[:, :2])
     return np.linalg.norm(np.diff(est, axis=0), axis=1)
 
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nav.recording import Recording
+from nav.series import resample
 
 from ..world.gait import GaitParams
 from ..ranges import RANGES
@@ -84,7 +85,7 @@ def measure_gait(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray) -> 
     steady = (periods > 0.6 * period) & (periods < 1.5 * period)
     finite = np.all(np.isfinite(track_pos), axis=1)
     middles = t[stances.middles()]
-    xy = np.stack([np.interp(middles, track_t[finite], track_pos[finite, i]) for i in range(2)], -1)
+    xy = resample(middles, track_t[finite], track_pos[finite, :2])
     steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
     walking = steps > 0.25 * np.median(steps)
     return GaitSummary(stride_period_s=float(np.median(periods[steady])),
