@@ -119,9 +119,8 @@ def build_walks(walks: int, out: Path) -> tuple[list[dict], float]:
     setup_s = time.perf_counter() - start
     variants = [v for v in compensation_variants(str(calibration), str(stance), list(exp.before_calibration_terms))
                 if v["name"] in HEADLINE]
-    tasks = [{"key": f"walk-{r:04d}", "scenario": doc, "seed": scenario.seed, "run": r,
-              "nav": dataclasses.asdict(nav), "sensors": {"paper": doc["sensor"]}, "variants": variants,
-              "keep_tracks": []} for r in range(walks)]
+    tasks = [walk_tasks.walk_task_spec(f"walk-{r:04d}", doc, scenario.seed, r, dataclasses.asdict(nav),
+                                       {"paper": doc["sensor"]}, variants) for r in range(walks)]
     return tasks, setup_s
 
 

@@ -33,11 +33,11 @@ from nav.metrics import summarise_runs
 from ..errors import ScenarioError
 from ..scenario import load_scenario, scenario_from_dict
 from ..world.gaits import KINDS
-from .paper import ALL_TERMS
+from .paper import compensation_variants
 from .reproduce import working_folder
 from .runner import run_tasks
 from .setup import calibrate_sensor, fit_stance_velocity, patched, scenario_doc, settings_from_scenario
-from .tasks import walk_task
+from .tasks import walk_task, walk_task_spec
 
 STUDY = "gaits"
 PIPELINES = ("before", "both")
@@ -68,13 +68,10 @@ def study_tasks(doc: dict, gaits: list[tuple[str, float]], nav_fields: dict, run
     tasks = []
     for kind, cadence in gaits:
         label = gait_label(kind, cadence)
-        variants = [{"name": "before", "sensor": "paper", "calibration": cal, "calibration_terms": before_terms},
-                    {"name": "both", "sensor": "paper", "calibration": cal, "calibration_terms": ALL_TERMS,
-                     "stance_velocity": stances[label]}]
+        variants = [v for v in compensation_variants(cal, stances[label], before_terms) if v["name"] in PIPELINES]
         for r in range(runs):
-            tasks.append({"key": f"gaits/{label}/run-{r:03d}", "scenario": gait_doc(doc, kind, cadence),
-                          "seed": seed, "run": r, "nav": nav_fields, "sensors": {"paper": doc["sensor"]},
-                          "variants": variants, "keep_tracks": []})
+            tasks.append(walk_task_spec(f"gaits/{label}/run-{r:03d}", gait_doc(doc, kind, cadence), seed, r,
+                                        nav_fields, {"paper": doc["sensor"]}, variants))
     return tasks
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..imu.presets import get_preset
 from .setup import ExperimentSettings, NavSettings, patched
+from .tasks import walk_task_spec
 
 ALL_TERMS = ["bias", "misalignment", "g_sensitivity"]
 
@@ -72,8 +73,7 @@ def build_tasks(doc: dict, nav: NavSettings, exp: ExperimentSettings, runs: int,
     tasks = []
 
     def task(key, scenario, run, sensors, variants, keep=()):
-        tasks.append({"key": key, "scenario": scenario, "seed": seed, "run": run, "nav": nav_d, "sensors": sensors,
-                      "variants": variants, "keep_tracks": list(keep)})
+        tasks.append(walk_task_spec(key, scenario, seed, run, nav_d, sensors, variants, keep))
 
     for r in range(runs):
         sensors = {"paper": paper_sensor}

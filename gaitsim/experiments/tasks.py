@@ -32,6 +32,13 @@ def _nav_options(nav: NavSettings, variant: dict):
     return nav.options(**changes)
 
 
+def walk_task_spec(key: str, scenario: dict, seed: int, run: int, nav: dict, sensors: dict, variants: list[dict],
+                   keep: tuple = ()) -> dict:
+    """A :func:`walk_task` task: its keys, in the order the studies store them."""
+    return {"key": key, "scenario": scenario, "seed": seed, "run": run, "nav": nav, "sensors": sensors,
+            "variants": variants, "keep_tracks": list(keep)}
+
+
 def walk_task(task: dict) -> dict:
     """Simulate the task's walk once and navigate it under each variant.
 
