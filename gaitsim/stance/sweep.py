@@ -81,7 +81,6 @@ class ThresholdResult:
     Attributes
     ----------
     threshold : SHOE gamma.
-    stances : the detected stances from the filter's start on.
     step_start : (S-1,) s, time of the first stance middle of each step.
     step_estimate, step_track : (S-1,) m, horizontal distance between consecutive stance middles in the
         solution and in the track (NaN where the track has none).
@@ -95,7 +94,6 @@ class ThresholdResult:
     """
 
     threshold: float
-    stances: DetectedStances
     step_start: np.ndarray
     step_estimate: np.ndarray
     step_track: np.ndarray
@@ -208,7 +206,7 @@ def run_threshold(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, th
     w = windows(t, stationary, track_t, track_pos)
     with_track = pipeline.navigate(rec, nav_options(threshold, track_pseudo_velocity(t, track_t, track_pos, w), method))
     return ThresholdResult(
-        threshold=float(threshold), stances=w.stances, step_start=w.stance_time[:-1], step_estimate=_steps(sol, w),
+        threshold=float(threshold), step_start=w.stance_time[:-1], step_estimate=_steps(sol, w),
         step_track=np.linalg.norm(np.diff(w.middle_pos[:, :2], axis=0), axis=1),
         step_estimate_track_pseudo=_steps(with_track, w),
         walking=w.walking, stance_time=w.stance_time, window=w.window, window_displacement=w.displacement,
@@ -248,10 +246,9 @@ QUANTITIES = {
 
 @dataclass
 class Sweep:
-    """A recording's threshold sweep: the per-threshold results and the curves of :data:`QUANTITIES`."""
+    """A recording's threshold sweep: the curves of :data:`QUANTITIES` over the thresholds."""
 
     thresholds: np.ndarray
-    results: list
     curves: dict
     strides: int
 
@@ -295,4 +292,4 @@ def sweep(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds
                 if len(steps) and np.any(r.walking[stances]):
                     draws[b, j] = quantity(r, steps, stances)
         curves[name] = _curve(values, draws)
-    return Sweep(thresholds, results, curves, strides=int(np.sum(results[-1].walking)))
+    return Sweep(thresholds, curves, strides=int(np.sum(results[-1].walking)))
