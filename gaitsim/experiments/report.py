@@ -210,7 +210,7 @@ What they show (the mechanisms were measured on the seed walk at 70, 84 and 100 
   position back by about the foot's speed times the time since toe off (~0.4 m per stride that has one). At 84
   and 100 steps/min the foot decelerates harder there (|f| - g ~ 5 m/s^2 at the rate zero) and no update falls
   in the swing. The adaptive SHOE's 50 ms window is longer than the coincidence.
-  tests/test_sensitivity_cadence.py asserts where the false updates sit and that the adaptive SHOE finds every
+  tests/test_sensitivity.py asserts where the false updates sit and that the adaptive SHOE finds every
   stance once, with no swing update.""")
     if {"detector shoe", "detector are", "detector mag", "detector mv"} <= set(sens):
         findings.append(f"""- **Detectors compared at one operating point.** A SHOE threshold handed to ARE, MAG or MV is a wider gate:
