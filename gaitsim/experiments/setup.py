@@ -188,12 +188,16 @@ def matched_thresholds(doc: dict, nav: NavSettings, exp: ExperimentSettings, cal
 
     Returns
     -------
-    {name: threshold (dimensionless)} for the names among ``nav.detectors.STATISTICS``; the [nav] detector
-    keeps its own threshold.
+    {name: threshold (dimensionless)} for the names among ``nav.detectors.STATISTICS`` (empty if none); the
+    [nav] detector keeps its own threshold.
     """
+    statistical = [name for name in names if name in detectors.STATISTICS]
+    if not statistical:
+        return {}
     if nav.detector not in detectors.STATISTICS:
-        raise ScenarioError(f"[nav] detector = {nav.detector!r}: thresholds are matched to a statistical detector's "
-                            f"operating point; allowed: {detectors.STATISTICS}")
+        raise ScenarioError(f"[experiment] sensitivity_detectors {statistical} are matched to the [nav] detector's "
+                            f"operating point, but [nav] detector = {nav.detector!r}; allowed then: "
+                            f"{detectors.STATISTICS}")
     cal = load_calibration(calibration)
     corrected = [(rec.gravity, *cal.correct(rec.acc, rec.gyr, terms=tuple(exp.before_calibration_terms)))
                  for rec in calibration_walks(doc, exp)]
@@ -205,8 +209,7 @@ def matched_thresholds(doc: dict, nav: NavSettings, exp: ExperimentSettings, cal
 
     share = detectors.marked_share(statistics(nav.detector), options.window, options.threshold)
     return {name: options.threshold if name == nav.detector else
-            detectors.threshold_for_fraction(statistics(name), options.window, share)
-            for name in names if name in detectors.STATISTICS}
+            detectors.threshold_for_fraction(statistics(name), options.window, share) for name in statistical}
 
 
 def fit_stance_velocity(doc: dict, nav: NavSettings, exp: ExperimentSettings, calibration: Path, out: Path,
