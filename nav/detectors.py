@@ -15,7 +15,9 @@ Window sums are sums of W shifted slices (vectorised, one pass per window offset
 are not taken as differences of a running cumulative sum: SHOE divides by sigma_a^2 ~ 1e-4, and the cumulative
 sum's round-off grows with the recording's length, so differences of it would make T depend on where the
 window sits. Every result carries its parameters (:class:`DetectorParams`): a threshold means nothing without
-sigma_a, sigma_g, W, the sample rate and the window semantics.
+sigma_a, sigma_g, W, the sample rate and the window semantics. Different statistics have thresholds in different
+units: :func:`threshold_for_fraction` gives a statistic the threshold that marks a given share of samples, to
+compare detectors at one operating point.
 """
 
 from __future__ import annotations

@@ -217,9 +217,10 @@ What they show (the mechanisms were measured on the seed walk at 70, 84 and 100 
   ARE then accepts the rate's near-zero crossings in swing, MAG the rolling foot's heel rocker and
   push-off, MV (the spread of {window} consecutive samples) almost every sample. At equal detected stance ARE is
   close to SHOE (`detector are` {along("detector are"):.2f} m against `detector shoe` {along("detector shoe"):.2f} m). MAG
-  ({along("detector mag"):.2f} m) and MV ({along("detector mv"):.2f} m) still mark instants of the swing: over {window} samples
-  at {rate_hz:g} Hz their statistics do not separate stance from swing at any threshold (a sweep from 1e2 to 3e5
-  finds none); that is a property of those statistics over such a short window, not of the set-up.""")
+  ({along("detector mag"):.2f} m) and MV ({along("detector mv"):.2f} m) still mark instants of the swing. Over {window} samples at
+  {rate_hz:g} Hz no threshold from 1e2 to 3e5 makes them mark the stance only: low ones mark instants of the swing,
+  high ones the whole ground contact with its rolling heel rocker and push-off (MAG) or nearly every sample (MV).
+  That is a property of those statistics over such a short window, not of the set-up.""")
     if {"grade bmi160", "grade bmi160 oracle"} <= set(sens):
         bmi = get_preset("bmi160").parameters
         findings.append(f"""- **bmi160 is the sensor, not the detector** (`grade bmi160` {along("grade bmi160"):.2f} m, its oracle row
