@@ -15,7 +15,9 @@ Window sums are sums of W shifted slices (vectorised, one pass per window offset
 are not taken as differences of a running cumulative sum: SHOE divides by sigma_a^2 ~ 1e-4, and the cumulative
 sum's round-off grows with the recording's length, so differences of it would make T depend on where the
 window sits. Every result carries its parameters (:class:`DetectorParams`): a threshold means nothing without
-sigma_a, sigma_g, W, the sample rate and the window semantics.
+sigma_a, sigma_g, W, the sample rate and the window semantics. Different statistics have thresholds in different
+units: :func:`threshold_for_fraction` gives a statistic the threshold that marks a given share of samples, to
+compare detectors at one operating point.
 """
 
 from __future__ import annotations
@@ -188,6 +190,44 @@ def detect(name: str, t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, threshold
     params = DetectorParams(name, float(threshold), float(sigma_a), float(sigma_g), int(window), sample_rate(t),
                             float(gravity))
     return DetectorResult(spread_marks(stat < threshold, int(window)), stat, params)
+
+
+def marked_share(statistics: list[np.ndarray], window: int, threshold: float) -> float:
+    """Share of all samples of the recordings whose statistics are ``statistics`` (each (N_i - W + 1,)) that a
+    threshold ``threshold`` marks stationary with W = ``window`` (sliding-window marks as in :func:`detect`)."""
+    total = sum(len(s) + window - 1 for s in statistics)
+    return sum(int(spread_marks(s < threshold, window).sum()) for s in statistics) / total
+
+
+def threshold_for_fraction(statistics: list[np.ndarray], window: int, fraction: float) -> float:
+    """The smallest threshold at which a detector marks at least ``fraction`` of the samples stationary.
+
+    Detectors with different statistics (SHOE, ARE, MV, MAG) have thresholds in different units; compared at
+    one operating point, each gets the threshold that marks the same share of the same recordings as
+    stationary. The marked share can only grow with the threshold and changes only where the threshold passes
+    a value of the statistic, so the answer is found by bisection over the sorted statistic values.
+
+    Parameters
+    ----------
+    statistics : the statistic T(k) of each recording (:func:`statistic`), each (N_i - W + 1,), dimensionless.
+    window : W, samples (the windows' marks are spread as in :func:`detect`).
+    fraction : target share of all samples of all recordings marked stationary, in (0, 1].
+
+    Returns
+    -------
+    gamma, dimensionless: the next floating-point number above a statistic value (``T < gamma`` marks it).
+    """
+    if not 0.0 < fraction <= 1.0:
+        raise ValueError(f"threshold_for_fraction: fraction = {fraction!r}; allowed: 0 < fraction <= 1")
+    candidates = np.nextafter(np.unique(np.concatenate(statistics)), np.inf)
+    low, high = 0, len(candidates) - 1  # marked_share at candidates[high] is 1 >= fraction
+    while low < high:
+        mid = (low + high) // 2
+        if marked_share(statistics, window, candidates[mid]) >= fraction:
+            high = mid
+        else:
+            low = mid + 1
+    return float(candidates[low])
 
 
 def oracle(t: np.ndarray, stance: np.ndarray) -> DetectorResult:

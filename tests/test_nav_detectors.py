@@ -140,3 +140,48 @@ def test_runs_closer_than_the_gap_merge_into_one_stance():
     np.testing.assert_array_equal(runs, [[2, 4], [5, 7], [12, 14]])
     np.testing.assert_array_equal(group, [0, 0, 1])
     assert merged_runs(t, np.zeros(20, bool), 0.03)[0].shape == (0, 2)
+
+
+@pytest.mark.parametrize("name", ["shoe", "are", "mv", "mag"])
+@pytest.mark.parametrize("fraction", [0.05, 0.3, 0.7, 1.0])
+def test_threshold_for_fraction_is_the_smallest_reaching_the_share(name, fraction):
+    """Over two recordings of different lengths, the returned gamma marks at least ``fraction`` of all samples,
+    and the largest statistic value below it (the next smaller candidate) marks less."""
+    window = 3
+    stats = [D.statistic(name, acc, gyr, 0.01, math.radians(0.1), window, G)
+             for _, acc, gyr in (signals(200, seed=1)[:3], signals(333, seed=2)[:3])]
+    gamma = D.threshold_for_fraction(stats, window, fraction)
+    assert D.marked_share(stats, window, gamma) >= fraction
+    below = np.concatenate(stats)
+    below = below[below < gamma]
+    if below.size:
+        assert D.marked_share(stats, window, below.max()) < fraction
+
+
+def test_a_threshold_round_trips_through_its_own_share():
+    """SHOE at gamma marks a share; the threshold found for that share marks exactly the same samples."""
+    _, acc, gyr = signals(500, seed=3)
+    stat = D.statistic("shoe", acc, gyr, 1.0, 1.0, 3, G)
+    gamma = float(np.median(stat))
+    again = D.threshold_for_fraction([stat], 3, D.marked_share([stat], 3, gamma))
+    np.testing.assert_array_equal(D.spread_marks(stat < again, 3), D.spread_marks(stat < gamma, 3))
+
+
+def test_are_matched_to_shoe_gets_a_lower_threshold_in_its_own_units():
+    """ARE is SHOE without the accelerometer term (T_are <= T_shoe window by window), so at SHOE's share of
+    stationary samples ARE's threshold cannot be higher; handing it SHOE's number would mark more."""
+    _, acc, gyr = signals(600, seed=4)
+    sa, sg = 0.3, 0.2
+    shoe = D.statistic("shoe", acc, gyr, sa, sg, 3, G)
+    are = D.statistic("are", acc, gyr, sa, sg, 3, G)
+    assert np.all(are <= shoe + 1e-9)
+    gamma = float(np.quantile(shoe, 0.4))
+    share = D.marked_share([shoe], 3, gamma)
+    matched = D.threshold_for_fraction([are], 3, share)
+    assert matched < gamma
+    assert D.marked_share([are], 3, gamma) > share
+
+
+def test_threshold_for_fraction_refuses_a_share_outside_0_1():
+    with pytest.raises(ValueError, match="fraction"):
+        D.threshold_for_fraction([np.ones(5)], 3, 0.0)

@@ -10,6 +10,14 @@ calibration      step 1: the full estimated calibration (bias, misalignment, g-s
 stance_velocity  step 2 alone: "before" plus the fitted stance pseudo-velocity
 both             steps 1 and 2
 <term>_only      ablation: one calibration term alone
+
+Sensitivity variants (the detector ones are the exceptions to the [nav] detector):
+
+grade:<preset>         the preset's sensor, no readout calibration; ``grade:<preset> oracle`` the same with the
+                       true stance labels, which separates the detector's share of the error from the sensor's
+detector:<name>        "before" with detector <name> at its matched threshold (:func:`.setup.matched_thresholds`)
+before adaptive        (cadence and mount rows) "before" with the adaptive SHOE (nav.adaptive_detector, floor =
+                       the [nav] threshold): a 50 ms window against the [nav] detector's W samples
 """
 
 from __future__ import annotations
@@ -65,8 +73,14 @@ def compensation_variants(cal: str, stance: str, before_terms: list[str]) -> lis
 
 
 def build_tasks(doc: dict, nav: NavSettings, exp: ExperimentSettings, runs: int, seed: int, cal: str,
-                stance: str) -> list[dict]:
-    """Every task of the reproduction (see the module docstring)."""
+                stance: str, detector_thresholds: dict[str, float] | None = None) -> list[dict]:
+    """Every task of the reproduction (see the module docstring).
+
+    ``detector_thresholds``: {detector: threshold in its own statistic's units} for the sensitivity's detector
+    rows (:func:`~.setup.matched_thresholds`); a detector without one runs at the [nav] threshold (the adaptive
+    SHOE's floor is a SHOE threshold).
+    """
+    detector_thresholds = detector_thresholds or {}
     nav_d = dataclasses.asdict(nav)
     paper_sensor = doc["sensor"]
     before = list(exp.before_calibration_terms)
@@ -84,9 +98,11 @@ def build_tasks(doc: dict, nav: NavSettings, exp: ExperimentSettings, runs: int,
         if r < exp.sensitivity_runs:
             for preset in exp.sensitivity_presets:
                 sensors[preset] = {"preset": preset}
-                variants.append({"name": f"grade:{preset}", "sensor": preset})
+                variants += [{"name": f"grade:{preset}", "sensor": preset},
+                             {"name": f"grade:{preset} oracle", "sensor": preset, "detector": "oracle"}]
             variants += [{"name": f"detector:{d}", "sensor": "paper", "calibration": cal, "calibration_terms": before,
-                          "detector": d} for d in exp.sensitivity_detectors]
+                          "detector": d, "threshold": detector_thresholds.get(d, nav.threshold)}
+                         for d in exp.sensitivity_detectors]
         task(f"main/run-{r:03d}", doc, r, sensors, variants, keep=("before", "both"))
 
     length = exp.heading_walk_length_m
@@ -105,6 +121,8 @@ def build_tasks(doc: dict, nav: NavSettings, exp: ExperimentSettings, runs: int,
              [{"name": "micromotion", "sensor": "ideal"}])
 
     sens_variants = [{"name": "before", "sensor": "paper", "calibration": cal, "calibration_terms": before},
+                     {"name": "before adaptive", "sensor": "paper", "calibration": cal, "calibration_terms": before,
+                      "detector": "adaptive"},
                      {"name": "calibration", "sensor": "paper", "calibration": cal, "calibration_terms": ALL_TERMS}]
     default_gait = doc.get("gait", {}).get("cadence_steps_per_min", 84.0)
     default_mount = doc.get("mount", {}).get("site", "toes")

@@ -28,8 +28,8 @@ from ..simulate import simulate_walk
 from . import report
 from .cycle import cycle_averages, detected_stance_s, predicted_length_loss
 from .paper import build_tasks, quick_overrides
-from .setup import (calibrate_sensor, fit_stance_velocity, scenario_doc, settings_from_scenario,
-                    targets_from_scenario)
+from .setup import (calibrate_sensor, fit_stance_velocity, matched_thresholds, scenario_doc,
+                    settings_from_scenario, targets_from_scenario)
 from .tasks import walk_task
 
 PAPER = scenario_file("paper.toml")
@@ -87,10 +87,11 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
 
     cal = calibrate_sensor(scenario, exp, out)
     stance, stance_info = fit_stance_velocity(doc, nav, exp, cal, out)
-    timings["calibration lab and stance-velocity walks"] = time.perf_counter() - clock
+    detector_thresholds = matched_thresholds(doc, nav, exp, cal, exp.sensitivity_detectors)
+    timings["calibration lab, stance-velocity walks and matched detector thresholds"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
-    tasks = build_tasks(doc, nav, exp, runs, scenario.seed, str(cal), str(stance))
+    tasks = build_tasks(doc, nav, exp, runs, scenario.seed, str(cal), str(stance), detector_thresholds)
     results = run_tasks(walk_task, tasks, work, workers=workers, scheduler=scheduler, progress=progress)
     timings[f"Monte Carlo ({len(tasks)} walks)"] = time.perf_counter() - clock
 
@@ -120,6 +121,7 @@ def reproduce(out: str | Path, scenario_path: str | Path = PAPER, quick: bool = 
         "heading": _collect(results, tasks, "heading/")["g_sensitivity_alone"][0],
         "budget": {v: summarise_runs(s) for v, s in _collect(results, tasks, "budget/").items()},
         "sensitivity": _sensitivity(results, tasks, main),
+        "sensitivity_detector_thresholds": detector_thresholds,
         "walk": {**results[0]["walk"], "stride_period_s": avg.cycle_s},
     }
     summary["timings_s"] = timings

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from nav import detectors
+from nav.calibration import load_calibration
 from nav.ekf import FilterConfig
 from nav.pipeline import NavOptions, prepare
 from nav.recording import Recording
@@ -130,6 +131,10 @@ def settings_from_scenario(scenario: Scenario) -> tuple[NavSettings, ExperimentS
                 raise ScenarioError(f"{scenario.source} [experiment]: {key} = {value!r} must be a non-empty list")
             lists[key] = tuple(kind(v) for v in value)
     exp = dataclasses.replace(fill(ExperimentSettings, table, f"{scenario.source} [experiment]"), **lists)
+    unknown = [d for d in exp.sensitivity_detectors if d not in detectors.DETECTORS]
+    if unknown:
+        raise ScenarioError(f"{scenario.source} [experiment]: sensitivity_detectors has {unknown}; allowed: "
+                            f"{detectors.DETECTORS}")
     check_ranges("experiment", dataclasses.asdict(exp), f"{scenario.source} [experiment]")
     return nav, exp
 
@@ -162,6 +167,51 @@ def calibrate_sensor(scenario: Scenario, exp: ExperimentSettings, out: Path) -> 
     return path
 
 
+def calibration_walks(doc: dict, exp: ExperimentSettings) -> list[Recording]:
+    """The calibration walks of scenario ``doc``: runs 0 .. calibration_walks - 1 with their own seed
+    (``calibration_walk_seed``), never the scored runs."""
+    scenario = scenario_from_dict(doc, "calibration walks")
+    return [simulate_walk(scenario, seed=exp.calibration_walk_seed, run=k) for k in range(exp.calibration_walks)]
+
+
+def matched_thresholds(doc: dict, nav: NavSettings, exp: ExperimentSettings, calibration: Path,
+                       names: tuple[str, ...]) -> dict[str, float]:
+    """Thresholds of the statistical detectors ``names`` at the [nav] detector's operating point.
+
+    SHOE, ARE, MV and MAG divide different sums by sigma_a^2 or sigma_g^2, so one number means a different gate
+    in each (a SHOE threshold bounds the sum of an accelerometer and a gyro term; ARE's the gyro term alone;
+    MV's the window's spread). Each detector here gets, in its own statistic's units, the threshold that marks
+    the same share of the calibration walks' samples stationary as the [nav] detector at its threshold (same
+    sigmas and window, the readout calibration of ``before_calibration_terms`` applied, as in the scored
+    variants): the detectors are compared at equal detected stance, the way detector evaluations compare them
+    at one operating point.
+
+    Returns
+    -------
+    {name: threshold (dimensionless)} for the names among ``nav.detectors.STATISTICS`` (empty if none); the
+    [nav] detector keeps its own threshold.
+    """
+    statistical = [name for name in names if name in detectors.STATISTICS]
+    if not statistical:
+        return {}
+    if nav.detector not in detectors.STATISTICS:
+        raise ScenarioError(f"[experiment] sensitivity_detectors {statistical} are matched to the [nav] detector's "
+                            f"operating point, but [nav] detector = {nav.detector!r}; allowed then: "
+                            f"{detectors.STATISTICS}")
+    cal = load_calibration(calibration)
+    corrected = [(rec.gravity, *cal.correct(rec.acc, rec.gyr, terms=tuple(exp.before_calibration_terms)))
+                 for rec in calibration_walks(doc, exp)]
+    options = nav.options()  # the detector settings in SI
+
+    def statistics(name: str) -> list[np.ndarray]:
+        return [detectors.statistic(name, acc, gyr, options.sigma_a, options.sigma_g, options.window, gravity)
+                for gravity, acc, gyr in corrected]
+
+    share = detectors.marked_share(statistics(nav.detector), options.window, options.threshold)
+    return {name: options.threshold if name == nav.detector else
+            detectors.threshold_for_fraction(statistics(name), options.window, share) for name in statistical}
+
+
 def fit_stance_velocity(doc: dict, nav: NavSettings, exp: ExperimentSettings, calibration: Path, out: Path,
                         threshold: float | None = None) -> tuple[Path, dict]:
     """Fit the stance pseudo-velocity from tracked calibration walks with their own seeds.
@@ -178,10 +228,8 @@ def fit_stance_velocity(doc: dict, nav: NavSettings, exp: ExperimentSettings, ca
     spec = TrackerSpec(exp.tracker_rate_hz, exp.tracker_resolution_m, exp.tracker_noise_m)
     options = nav.options(threshold=threshold, calibration=calibration,
                           calibration_terms=exp.before_calibration_terms)
-    scenario = scenario_from_dict(doc, "calibration walks")
     stances, unresolved = [], 0
-    for k in range(exp.calibration_walks):
-        rec: Recording = simulate_walk(scenario, seed=exp.calibration_walk_seed, run=k)
+    for k, rec in enumerate(calibration_walks(doc, exp)):
         tracked = track(rec.truth, spec, np.random.default_rng([exp.calibration_walk_seed, k]))
         starts, ends = stationary_runs(prepare(rec, options).stationary)
         for a, b in list(zip(starts, ends))[1:-1]:  # the first and last runs are the rests around the walk
