@@ -340,16 +340,21 @@ class FootTrajectory:
         """(3, 5, N) derivative stacks of the heel contact point (m, world) at times ``t`` (s)."""
         t = np.asarray(t, float)
         plan = self.plan
+        order = np.argsort(t, kind="stable")  # each stance and swing is then a slice of the sorted times
+        ts = t[order]
+        # stance k: [t_ic[k], t_to[k]) (the last to the end); swing k: [t_to[k], t_ic[k + 1])
+        ic, to = np.searchsorted(ts, plan.t_ic), np.searchsorted(ts, plan.t_to)
+        n = plan.n_strides
         out = np.zeros((3, smooth.NDER, t.size))
-        for k in range(plan.n_strides + 1):
-            m = (t >= plan.t_ic[k]) & (t < plan.t_to[k]) if k < plan.n_strides else t >= plan.t_ic[k]
-            if m.any():
-                out[:, :, m] = self._stance_heel(k, t[m])
-            if k < plan.n_strides:
-                m = (t >= plan.t_to[k]) & (t < plan.t_ic[k + 1])
-                if m.any():
-                    out[:, :, m] = self._swing_heel(k, t[m])
-        return out
+        for k in range(n + 1):
+            stance = slice(ic[k], to[k] if k < n else t.size)
+            if stance.start < stance.stop:
+                out[:, :, stance] = self._stance_heel(k, ts[stance])
+            if k < n and to[k] < ic[k + 1]:
+                out[:, :, to[k]:ic[k + 1]] = self._swing_heel(k, ts[to[k]:ic[k + 1]])
+        unsorted = np.empty_like(out)
+        unsorted[:, :, order] = out
+        return unsorted
 
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
@@ -379,14 +384,26 @@ class FootTrajectory:
     def point(self, t: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:
         """(N, 3) m: world position at times ``t`` (s) of the foot point ``lever_arm`` (m, foot frame, from the
         heel contact)."""
-        t = np.asarray(t, float)
-        yaw, pitch, roll = self.angles(t)[:, 0]
-        rotation = quat.to_matrix(quat.from_euler_zyx(yaw, pitch, roll))
-        return self.heel(t)[:, 0, :].T + rotation @ np.asarray(lever_arm, float)
+        return foot_point(self.joints(np.asarray(t, float))[:, 0], lever_arm)
 
-    def stance_displacement(self, lever_arm: np.ndarray = np.zeros(3)) -> np.ndarray:
-        """(n+1, 3) m: exact displacement over foot flat [t_ff, t_ho] of the foot point ``lever_arm`` (m, foot
-        frame; the IMU site's for the truth)."""
+    def sample(self, t: np.ndarray, lever_arm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joint stacks at times ``t`` (s) and the stance displacements of a foot point, in one evaluation.
+
+        Returns
+        -------
+        joints : (6, 5, N) derivative stacks of the joints (:meth:`joints`).
+        stance_displacement : (n+1, 3) m, exact displacement over each foot flat [t_ff, t_ho] of the foot point
+            ``lever_arm`` (m, foot frame; the IMU site's for the truth).
+        """
         p = self.plan
-        ff, ho = np.split(self.point(np.concatenate([p.t_ff, p.t_ho]), lever_arm), 2)
-        return ho - ff
+        n = np.asarray(t).size
+        joints = self.joints(np.concatenate([np.asarray(t, float).ravel(), p.t_ff, p.t_ho]))
+        ff, ho = np.split(foot_point(joints[:, 0, n:], lever_arm), 2)
+        return joints[:, :, :n], ho - ff
+
+
+def foot_point(joints: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:
+    """(N, 3) m: world position of the foot point ``lever_arm`` (m, foot frame, from the heel contact) at joint
+    values ``joints`` (6, N): x, y, z (m) of the heel point, yaw, pitch, roll (rad)."""
+    rotation = quat.to_matrix(quat.from_euler_zyx(*joints[3:]))
+    return joints[:3].T + rotation @ np.asarray(lever_arm, float)

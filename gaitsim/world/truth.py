@@ -66,7 +66,7 @@ def simulate_truth(walk: Walk, mount: Mount, rate_hz: float, gravity: float,
     traj = FootTrajectory(walk, plan, foot.toe_length)
     n = int(np.floor(plan.t_end * rate_hz + 1e-9)) + 1
     t = np.arange(n) / rate_hz
-    joints = traj.joints(t)
+    joints, displacement = traj.sample(t, foot.lever_arm)
     qpos, qvel, qacc = joints[:, 0].T, joints[:, 1].T, joints[:, 2].T
     s = foot.kinematics(qpos, qvel, qacc)
     foot.check(qpos, qvel, qacc, s, check_rows(t, plan))
@@ -74,5 +74,5 @@ def simulate_truth(walk: Walk, mount: Mount, rate_hz: float, gravity: float,
     truth = Truth(t=t, pos=s.pos, vel=s.vel, quat=s.quat, gyr=s.gyr, acc=s.acc, dv=dv, dth=dth,
                   stance=stance_labels(t, plan))
     events = Events(t_ic=plan.t_ic, t_ff=plan.t_ff, t_ho=plan.t_ho, t_to=plan.t_to,
-                    stance_displacement=traj.stance_displacement(foot.lever_arm))
+                    stance_displacement=displacement)
     return truth, events
