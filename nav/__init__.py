@@ -17,15 +17,22 @@ base name and the value is converted once there: ``--sigma-g-dps`` / ``sigma_g_d
 ``stance_velocity(stationary)`` method.
 """
 
-from .detectors import DetectorParams, DetectorResult, convert_threshold, detect, oracle
-from .ekf import FilterConfig, FilterOutput, run_filter, run_filter_batch
-from .pipeline import HeadingSource, NavOptions, navigate, run, score_solution
-from .solution import Solution, write_solution
-from .strapdown import integrate
+from importlib import import_module
 
-__all__ = [
-    "DetectorParams", "DetectorResult", "convert_threshold", "detect", "oracle",
-    "FilterConfig", "FilterOutput", "run_filter", "run_filter_batch",
-    "HeadingSource", "NavOptions", "navigate", "run", "score_solution",
-    "Solution", "write_solution", "integrate",
-]
+# the package's main names, each imported from its module on first use (``import nav.recording`` then loads
+# no filter, detector or scipy module it does not need)
+_EXPORTS = {
+    "detectors": ("DetectorParams", "DetectorResult", "convert_threshold", "detect", "oracle"),
+    "ekf": ("FilterConfig", "FilterOutput", "run_filter", "run_filter_batch"),
+    "pipeline": ("HeadingSource", "NavOptions", "navigate", "run", "score_solution"),
+    "solution": ("Solution", "write_solution"),
+    "strapdown": ("integrate",),
+}
+_MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
+__all__ = list(_MODULE_OF)
+
+
+def __getattr__(name: str):
+    if name in _MODULE_OF:
+        return getattr(import_module(f".{_MODULE_OF[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

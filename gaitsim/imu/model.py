@@ -48,9 +48,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 from numba import njit
-from scipy.signal import butter, lfilter, sosfilt, sosfilt_zi
 
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, gauss_markov_peak
@@ -263,6 +261,8 @@ def add_gauss_markov_bias(out: np.ndarray, dt: float, instability: np.ndarray, t
     tau_c : correlation time, s.
     rng : the term's own Generator.
     """
+    from scipy.signal import lfilter
+
     node_step = int(max(1, min(SLOW_PROCESS_STEP, np.floor(tau_c / (20.0 * dt)))))
     sigma = _gauss_markov_std_per_instability() * np.asarray(instability)
     decay = np.exp(-node_step * dt / tau_c)
@@ -289,6 +289,8 @@ def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.
     """
     if cutoff_hz >= 0.5 * rate_hz:
         raise ScenarioError(f"bandwidth {cutoff_hz} Hz must be below half the sample rate ({0.5 * rate_hz} Hz)")
+    from scipy.signal import butter, sosfilt, sosfilt_zi
+
     sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
     zi = sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
     return sosfilt(sos, x, axis=0, zi=zi)[0]
@@ -375,6 +377,8 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
     # 2. sampling instants
     clock, skew = float(p["clock_error"]), float(p["accel_gyro_skew"])
     if clock or skew:
+        from scipy.interpolate import CubicSpline
+
         k = np.arange(int(np.floor((t.size - 1) * (1.0 + clock))) + 1)
         instants = t[0] + k * dt / (1.0 + clock)
         keep = (instants >= t[0]) & (instants <= t[-1]) & (instants + skew >= t[0]) & (instants + skew <= t[-1])
