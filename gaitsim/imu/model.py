@@ -220,6 +220,18 @@ def _add_interpolated(out: np.ndarray, nodes: np.ndarray, node_step: int) -> Non
 
 
 @njit(cache=True)
+def _first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
+    """(J+1, 3) nodes of the recursion nodes[0] = first, nodes[j+1] = decay nodes[j] + steps[j] (``steps`` (J, 3)):
+    the arithmetic of scipy's ``lfilter([1], [1, -decay], steps, zi=decay * first)`` after ``first``."""
+    nodes = np.empty((steps.shape[0] + 1, 3))
+    nodes[0] = first
+    for j in range(steps.shape[0]):
+        for c in range(3):
+            nodes[j + 1, c] = decay * nodes[j, c] + steps[j, c]
+    return nodes
+
+
+@njit(cache=True)
 def _add_scaled(out: np.ndarray, draws: np.ndarray, scale: np.ndarray) -> None:
     """out[k, c] += draws[k, c] * scale[c] (no temporary array)."""
     for k in range(out.shape[0]):
@@ -261,15 +273,13 @@ def add_gauss_markov_bias(out: np.ndarray, dt: float, instability: np.ndarray, t
     tau_c : correlation time, s.
     rng : the term's own Generator.
     """
-    from scipy.signal import lfilter
-
     node_step = int(max(1, min(SLOW_PROCESS_STEP, np.floor(tau_c / (20.0 * dt)))))
     sigma = _gauss_markov_std_per_instability() * np.asarray(instability)
     decay = np.exp(-node_step * dt / tau_c)
     draws = rng.standard_normal((_node_count(out.shape[0], node_step), 3))
     first = draws[0] * sigma
     steps = draws[1:] * (sigma * np.sqrt(1.0 - decay**2))
-    nodes = np.concatenate([first[None, :], lfilter([1.0], [1.0, -decay], steps, axis=0, zi=(decay * first)[None, :])[0]])
+    nodes = _first_order_recursion(first, steps, decay)
     _add_interpolated(out, nodes, node_step)
 
 
