@@ -213,7 +213,7 @@ class FootTrajectory:
                 axes[2] += [smooth.Ringing(t_event, imp.ringing_hz, imp.ringing_damping, imp.ringing_accel_mps2)
                             for t_event in (plan.t_ic[k], plan.t_ff[k])]
             if plan.walking[k] and mm.enabled:
-                for a in range(3):
+                for a in np.flatnonzero(mm.creep_velocity_mps):
                     axes[a].append(smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
                                                                mm.creep_velocity_mps[a]))
             self.contact.append(axes)
@@ -276,23 +276,26 @@ class FootTrajectory:
         return out
 
     def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(2, 5, N) stacks of stance k's foot-flat (roll, yaw) angles, rad: zero before its foot flat, rising
-        through it, held through the push-off, returned to zero over the following swing."""
+        """(2, 5, N) stacks at increasing times ``t`` (s) of stance k's foot-flat (roll, yaw) angles, rad: zero
+        before its foot flat, rising through it, held through the push-off, returned to zero over the following
+        swing; each piece is evaluated on its own window only."""
         out = np.zeros((2, smooth.NDER, t.size))
         if self.rotation is None or k not in self.rotation:
             return out
         for a, pieces in enumerate(self.rotation[k]):
-            out[a] = sum(p.stack(t) for p in pieces)
+            for piece in pieces:
+                smooth.accumulate(out[a], t, piece.t0, piece.t1, piece.stack)
         return out
 
     # -- pieces ---------------------------------------------------------------------------------------------
 
     def _contact_stack(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement."""
+        """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement at increasing times ``t``
+        (s); each piece is evaluated on its own window only."""
         local = np.zeros((3, smooth.NDER, t.size))
         for a in range(3):
             for piece in self.contact[k][a]:
-                local[a] += piece.stack(t)
+                smooth.accumulate(local[a], t, piece.t0, piece.t1, piece.stack)
         return np.einsum("ij,jdn->idn", self.frames[k], local)
 
     def _stance_heel(self, k: int, t: np.ndarray, pitch: np.ndarray) -> np.ndarray:

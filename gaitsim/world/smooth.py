@@ -266,13 +266,14 @@ class Ringing:
         self.amp = accel / w**2
         self.period = 1.0 / freq_hz
         self.duration = max(np.log(100.0) / (zeta * w), 3 * self.period)
+        self.t1 = t0 + self.duration  # zero outside [t0, t1]
         self.rise = smoothstep(t0, self.period, 0.0, 1.0)
         self.fade = smoothstep(t0 + self.duration - self.period, self.period, 1.0, 0.0)
 
     def stack(self, t: np.ndarray) -> np.ndarray:
         t = np.asarray(t, float)
         out = np.zeros((NDER, t.size))
-        m = (t >= self.t0) & (t <= self.t0 + self.duration)
+        m = (t >= self.t0) & (t <= self.t1)
         if not m.any():
             return out
         s = t[m] - self.t0
