@@ -68,10 +68,15 @@ class Piecewise:
         inside = (t >= self.t0) & (t <= self.t1)
         if inside.any():
             ti = t[inside]
-            piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
-            local = ti - self._left[piece]
-            coef = self._coef[:, :, piece]  # (k+1, 5, n)
-            value = coef[0].copy()
+            if self._interior.size:
+                piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
+                local = ti - self._left[piece]
+                coef = self._coef[:, :, piece]  # (k+1, 5, n)
+            else:  # one piece: its coefficients broadcast over the samples
+                local = ti - self._left[0]
+                coef = self._coef  # (k+1, 5, 1)
+            value = np.empty((NDER, ti.size))
+            value[:] = coef[0]
             for c in coef[1:]:
                 value *= local
                 value += c
