@@ -5,7 +5,7 @@ Reads any recording (simulated or measured) and never imports the simulator (``g
 Modules: ``recording`` (the folder format), ``checks`` (bad input), ``calibration`` (step 1), ``detectors``,
 ``alignment``, ``strapdown``, ``ekf`` (compiled loops in ``_numba``), ``zupt_velocity`` (step 2),
 ``pipeline`` (recording -> solution), ``metrics``, ``solution``, ``command`` (``gaitsim nav``), and the shared
-helpers ``constants``, ``files``, ``quaternion`` and ``series``.
+helpers ``constants``, ``files``, ``lazy``, ``quaternion`` and ``series``.
 
 Names and units: one base name per quantity, from the command line through Python to JSON. Inside Python
 every value is in SI units (m, s, rad, m/s^2, rad/s) and the name carries no unit (``sigma_g`` in rad/s,
@@ -17,7 +17,7 @@ base name and the value is converted once there: ``--sigma-g-dps`` / ``sigma_g_d
 ``stance_velocity(stationary)`` method.
 """
 
-from importlib import import_module
+from .lazy import lazy_exports
 
 # the package's main names, each imported from its module on first use (``import nav.recording`` then loads
 # no filter, detector or scipy module it does not need)
@@ -28,11 +28,4 @@ _EXPORTS = {
     "solution": ("Solution", "write_solution"),
     "strapdown": ("integrate",),
 }
-_MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
-__all__ = list(_MODULE_OF)
-
-
-def __getattr__(name: str):
-    if name in _MODULE_OF:
-        return getattr(import_module(f".{_MODULE_OF[name]}", __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__all__, __getattr__ = lazy_exports(__name__, _EXPORTS)
