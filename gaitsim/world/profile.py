@@ -309,7 +309,7 @@ class FootTrajectory:
         heading = np.array([np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k])])
         rolled = heading[:, None, None] * travel
         out[2] += height
-        if self.rotation is not None and k in self.rotation:
+        if self.rotation is not None and k in self.rotation and self.walk.micro.stance_rotation_rate[2]:  # a yaw
             arm = self.walk.micro.stance_yaw_pivot_frac * self.toe_length * heading
             rolled[:, 0] -= arm[:, None]
             cos_y, sin_y = smooth.compose_trig(self._rotation_of(k, t)[1])
