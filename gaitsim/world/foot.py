@@ -40,7 +40,8 @@ class Mount:
 
 @dataclass
 class SiteSamples:
-    """Sensor readings of the IMU site at each sample (MuJoCo's own sensors).
+    """Sensor quantities of the IMU site at each sample (MuJoCo's own sensors, or the same from the rigid-body
+    formulas).
 
     Attributes
     ----------
@@ -134,6 +135,7 @@ class FootModel:
             if name == "quat":
                 ours = ours * np.sign(np.einsum("ij,ij->i", ours, theirs))[:, None]
             error = np.abs(ours - theirs).max(axis=1)
+            # the tolerance's scale: the quantity's range on these rows, floored for rows that barely move
             scale = max(np.abs(theirs).max(), 1.0 if name in ("pos", "quat") else 1e-3)
             worst = int(np.argmax(error))
             if error[worst] > rel_tol * scale:
