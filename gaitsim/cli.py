@@ -6,25 +6,25 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from importlib import import_module
 
-from nav import command as nav_command
 from nav import storage
 
-from .experiments import command as experiments_command
 from .experiments.runner import RunsFailedError
-from .fixtures import command as fixtures_command
-from .loop import command as loop_command
-from .measured import import_command
-from .ranges import check_value
-from .scenario import load_scenario
-from .simulate import generate, summary
-from .stance import command as stance_command
 
-# subcommands living in their own modules; each exposes add_parser(subparsers)
-SUBCOMMANDS = (nav_command, experiments_command, loop_command, stance_command, import_command, fixtures_command)
+# subcommand -> the module defining it with add_parser(subparsers); a command imports only its own module (and
+# so only the libraries it needs: no numba, scipy.signal or matplotlib for ``generate``)
+SUBCOMMANDS = {"nav": "nav.command", "reproduce": "gaitsim.experiments.command",
+               "run": "gaitsim.experiments.command", "loop": "gaitsim.loop.command",
+               "stance": "gaitsim.stance.command", "import": "gaitsim.measured.import_command",
+               "fixtures": "gaitsim.fixtures.command", "score": "gaitsim.fixtures.command"}
 
 
 def _generate(args) -> int:
+    from .ranges import check_value
+    from .scenario import load_scenario
+    from .simulate import generate, summary
+
     scenario = load_scenario(args.scenario)
     if args.seed is not None:
         check_value("scenario", "seed", args.seed, "gaitsim generate --seed")
@@ -40,7 +40,9 @@ def _generate(args) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The command-line parser: with ``command`` (a subcommand name) only that subcommand's module is imported
+    and its parser added (with ``generate``); otherwise every subcommand's, for the overall help."""
     parser = argparse.ArgumentParser(prog="gaitsim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     gen = sub.add_parser("generate", help="simulate a scenario and write recording folders")
@@ -52,9 +54,16 @@ def build_parser() -> argparse.ArgumentParser:
     storage.add_arguments(gen)
     gen.add_argument("--no-progress", action="store_true", help="no progress bar over the runs")
     gen.set_defaults(func=_generate)
-    for module in SUBCOMMANDS:
-        module.add_parser(sub)
+    if command != "generate":
+        modules = [SUBCOMMANDS[command]] if command in SUBCOMMANDS else dict.fromkeys(SUBCOMMANDS.values())
+        for name in modules:
+            import_module(name).add_parser(sub)
     return parser
+
+
+def _command(argv: list[str]) -> str | None:
+    """The subcommand named in ``argv`` (its first word not starting with ``-``), or None."""
+    return next((word for word in argv if not word.startswith("-")), None)
 
 
 EXIT_INPUT = 2  # bad input: scenario, recording, options or output path (the message says which)
@@ -65,8 +74,8 @@ EXIT_INTERNAL = 4  # a bug: an exception no input check anticipated (traceback w
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; every failure ends in one message on stderr and a non-zero exit code, never a
     traceback (set the environment variable GAITSIM_DEBUG=1 to see the traceback of an internal error)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(_command(argv)).parse_args(argv)
     try:
         return args.func(args)
     except RunsFailedError as exc:

@@ -5,7 +5,7 @@ Reads any recording (simulated or measured) and never imports the simulator (``g
 Modules: ``recording`` (the folder format), ``checks`` (bad input), ``calibration`` (step 1), ``detectors``,
 ``alignment``, ``strapdown``, ``ekf`` (compiled loops in ``_numba``), ``zupt_velocity`` (step 2),
 ``pipeline`` (recording -> solution), ``metrics``, ``solution``, ``command`` (``gaitsim nav``), and the shared
-helpers ``constants``, ``files``, ``quaternion`` and ``series``.
+helpers ``constants``, ``files``, ``lazy``, ``quaternion`` and ``series``.
 
 Names and units: one base name per quantity, from the command line through Python to JSON. Inside Python
 every value is in SI units (m, s, rad, m/s^2, rad/s) and the name carries no unit (``sigma_g`` in rad/s,
@@ -17,15 +17,15 @@ base name and the value is converted once there: ``--sigma-g-dps`` / ``sigma_g_d
 ``stance_velocity(stationary)`` method.
 """
 
-from .detectors import DetectorParams, DetectorResult, convert_threshold, detect, oracle
-from .ekf import FilterConfig, FilterOutput, run_filter, run_filter_batch
-from .pipeline import HeadingSource, NavOptions, navigate, run, score_solution
-from .solution import Solution, write_solution
-from .strapdown import integrate
+from .lazy import lazy_exports
 
-__all__ = [
-    "DetectorParams", "DetectorResult", "convert_threshold", "detect", "oracle",
-    "FilterConfig", "FilterOutput", "run_filter", "run_filter_batch",
-    "HeadingSource", "NavOptions", "navigate", "run", "score_solution",
-    "Solution", "write_solution", "integrate",
-]
+# the package's main names, each imported from its module on first use (``import nav.recording`` then loads
+# no filter, detector or scipy module it does not need)
+_EXPORTS = {
+    "detectors": ("DetectorParams", "DetectorResult", "convert_threshold", "detect", "oracle"),
+    "ekf": ("FilterConfig", "FilterOutput", "run_filter", "run_filter_batch"),
+    "pipeline": ("HeadingSource", "NavOptions", "navigate", "run", "score_solution"),
+    "solution": ("Solution", "write_solution"),
+    "strapdown": ("integrate",),
+}
+__all__, __getattr__ = lazy_exports(__name__, _EXPORTS)

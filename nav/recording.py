@@ -190,7 +190,7 @@ def write_csv(path: Path, header: tuple[str, ...], table: np.ndarray, resolution
     Values round-trip float64 exactly (``%.17g``) except in columns whose name before ``_`` is a key of
     ``resolution`` (decimal places; see :func:`nav.storage.column_formats`).
     """
-    storage.write_text(path, storage.table_text(header, table, resolution))
+    storage.write_table(path, header, table, resolution)
 
 
 def read_csv(path: Path, header: tuple[str, ...]) -> np.ndarray:

@@ -1,9 +1,12 @@
 """IMU error model, datasheet units, presets and the simulated calibration lab."""
 
-from gaitsim.imu.calibration_lab import ShakerResult, run_lab, shaker_g_sensitivity
-from gaitsim.imu.config import sensor_from_table
-from gaitsim.imu.model import SensorSpec, apply_sensor
-from gaitsim.imu.presets import PRESET_NAMES, get_preset
+from nav.lazy import lazy_exports
 
-__all__ = ["PRESET_NAMES", "SensorSpec", "ShakerResult", "apply_sensor", "get_preset", "run_lab",
-           "sensor_from_table", "shaker_g_sensitivity"]
+# each name is imported from its module on first use (simulating a walk does not need the calibration lab)
+_EXPORTS = {
+    "calibration_lab": ("ShakerResult", "run_lab", "shaker_g_sensitivity"),
+    "config": ("sensor_from_table",),
+    "model": ("SensorSpec", "apply_sensor"),
+    "presets": ("PRESET_NAMES", "get_preset"),
+}
+__all__, __getattr__ = lazy_exports(__name__, _EXPORTS)

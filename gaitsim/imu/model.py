@@ -48,9 +48,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 from numba import njit
-from scipy.signal import butter, lfilter, sosfilt, sosfilt_zi
 
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, gauss_markov_peak
@@ -222,6 +220,18 @@ def _add_interpolated(out: np.ndarray, nodes: np.ndarray, node_step: int) -> Non
 
 
 @njit(cache=True)
+def _first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
+    """(J+1, 3) nodes of the recursion nodes[0] = first, nodes[j+1] = decay nodes[j] + steps[j] (``steps`` (J, 3)):
+    the arithmetic of scipy's ``lfilter([1], [1, -decay], steps, zi=decay * first)`` after ``first``."""
+    nodes = np.empty((steps.shape[0] + 1, 3))
+    nodes[0] = first
+    for j in range(steps.shape[0]):
+        for c in range(3):
+            nodes[j + 1, c] = decay * nodes[j, c] + steps[j, c]
+    return nodes
+
+
+@njit(cache=True)
 def _add_scaled(out: np.ndarray, draws: np.ndarray, scale: np.ndarray) -> None:
     """out[k, c] += draws[k, c] * scale[c] (no temporary array)."""
     for k in range(out.shape[0]):
@@ -269,7 +279,7 @@ def add_gauss_markov_bias(out: np.ndarray, dt: float, instability: np.ndarray, t
     draws = rng.standard_normal((_node_count(out.shape[0], node_step), 3))
     first = draws[0] * sigma
     steps = draws[1:] * (sigma * np.sqrt(1.0 - decay**2))
-    nodes = np.concatenate([first[None, :], lfilter([1.0], [1.0, -decay], steps, axis=0, zi=(decay * first)[None, :])[0]])
+    nodes = _first_order_recursion(first, steps, decay)
     _add_interpolated(out, nodes, node_step)
 
 
@@ -289,6 +299,8 @@ def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.
     """
     if cutoff_hz >= 0.5 * rate_hz:
         raise ScenarioError(f"bandwidth {cutoff_hz} Hz must be below half the sample rate ({0.5 * rate_hz} Hz)")
+    from scipy.signal import butter, sosfilt, sosfilt_zi
+
     sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
     zi = sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
     return sosfilt(sos, x, axis=0, zi=zi)[0]
@@ -375,6 +387,8 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
     # 2. sampling instants
     clock, skew = float(p["clock_error"]), float(p["accel_gyro_skew"])
     if clock or skew:
+        from scipy.interpolate import CubicSpline
+
         k = np.arange(int(np.floor((t.size - 1) * (1.0 + clock))) + 1)
         instants = t[0] + k * dt / (1.0 + clock)
         keep = (instants >= t[0]) & (instants <= t[-1]) & (instants + skew >= t[0]) & (instants + skew <= t[-1])

@@ -2,6 +2,10 @@
 
 ``mj_inverse`` evaluates every sensor at exactly the prescribed state (anchors §8); ``mj_forward`` would
 overwrite qacc. The accelerometer sensor gives specific force in the site frame (+9.81 on the up axis at rest).
+
+The model (the site's place and axes on the foot, gravity) is MuJoCo's; :meth:`FootModel.kinematics` evaluates
+the same site quantities with the rigid-body formulas of its joint chain for all samples at once, and
+:meth:`FootModel.check` holds them against MuJoCo's own sensors on chosen samples.
 """
 
 from __future__ import annotations
@@ -36,7 +40,8 @@ class Mount:
 
 @dataclass
 class SiteSamples:
-    """Sensor readings of the IMU site at each sample (MuJoCo's own sensors).
+    """Sensor quantities of the IMU site at each sample (MuJoCo's own sensors, or the same from the rigid-body
+    formulas).
 
     Attributes
     ----------
@@ -77,11 +82,66 @@ class FootModel:
         m.site_sameframe[imu] = 0  # the compiler flagged it as coinciding with the body frame; it no longer does
         self.mount = mount
         self.lever_arm = np.array(m.site_pos[imu])  # m, IMU site in the foot frame (from the heel contact)
+        self.imu_site = imu  # MuJoCo id of the IMU site
         self._slices = {}
         for name in ("acc", "gyr", "pos", "quat", "vel"):
             sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, f"imu_{name}")
             adr, dim = m.sensor_adr[sid], m.sensor_dim[sid]
             self._slices[name] = slice(adr, adr + dim)
+
+    def kinematics(self, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray) -> SiteSamples:
+        """The IMU site's sensor quantities at N prescribed states (each (N, 6): joints x, y, z, yaw, pitch,
+        roll; m, rad and their rates), from the rigid-body formulas of the joint chain, vectorised.
+
+        The attitude is R = Rz(yaw) Ry(pitch) Rx(roll); the angular velocity is the sum of the joint rates about
+        their axes, w = yaw' e_z + pitch' e_y' + roll' e_x'' (e_y' = Rz e_y, e_x'' = Rz Ry e_x), and its rate adds
+        the turning of those axes. The site at lever r = R r_foot from the heel point p moves at p' + w x r and
+        accelerates at p'' + w' x r + w x (w x r); the accelerometer reads R_site^T (a - g), the gyro R_site^T w.
+        Equal to :meth:`sample` to round-off (:meth:`check`).
+        """
+        m = self.model
+        yaw, pitch, roll = np.asarray(qpos, float)[:, 3:].T
+        vel, ang_rate = np.asarray(qvel, float)[:, :3], np.asarray(qvel, float)[:, 3:]
+        acc, ang_acc = np.asarray(qacc, float)[:, :3], np.asarray(qacc, float)[:, 3:]
+        cz, sz, cy, sy = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+        zero = np.zeros_like(yaw)
+        axes = np.stack([np.stack([zero, zero, zero + 1.0], -1),  # yaw axis e_z
+                         np.stack([-sz, cz, zero], -1),  # pitch axis e_y' = Rz e_y
+                         np.stack([cz * cy, sz * cy, -sy], -1)])  # roll axis e_x'' = Rz Ry e_x
+        w_yaw_pitch = ang_rate[:, :1] * axes[0] + ang_rate[:, 1:2] * axes[1]
+        w = w_yaw_pitch + ang_rate[:, 2:] * axes[2]
+        axes_rate = np.stack([np.cross(ang_rate[:, :1] * axes[0], axes[1]), np.cross(w_yaw_pitch, axes[2])])
+        w_dot = (np.einsum("nj,jni->ni", ang_acc, axes) + ang_rate[:, 1:2] * axes_rate[0]
+                 + ang_rate[:, 2:] * axes_rate[1])
+        body = quat.from_euler_zyx(yaw, pitch, roll)
+        site = self.imu_site
+        lever = quat.rotate(body, np.broadcast_to(m.site_pos[site], w.shape))
+        q = continuous_sign(quat.multiply(body, np.broadcast_to(m.site_quat[site], body.shape)))
+        site_to_world = quat.to_matrix(q)
+        world_acc = acc + np.cross(w_dot, lever) + np.cross(w, np.cross(w, lever))
+        return SiteSamples(pos=np.asarray(qpos, float)[:, :3] + lever, vel=vel + np.cross(w, lever), quat=q,
+                           gyr=np.einsum("nji,nj->ni", site_to_world, w),
+                           acc=np.einsum("nji,nj->ni", site_to_world, world_acc - m.opt.gravity))
+
+    def check(self, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray, samples: SiteSamples, rows: np.ndarray,
+              rel_tol: float = 1e-9) -> None:
+        """Raise if ``samples`` (:meth:`kinematics` at the N states) differ on ``rows`` from MuJoCo's sensors
+        (:meth:`sample`) by more than ``rel_tol`` times each quantity's largest magnitude there (quaternions up
+        to sign)."""
+        rows = np.asarray(rows)
+        mujoco_samples = self.sample(qpos[rows], qvel[rows], qacc[rows])
+        for name in ("pos", "vel", "quat", "gyr", "acc"):
+            ours, theirs = getattr(samples, name)[rows], getattr(mujoco_samples, name)
+            if name == "quat":
+                ours = ours * np.sign(np.einsum("ij,ij->i", ours, theirs))[:, None]
+            error = np.abs(ours - theirs).max(axis=1)
+            # the tolerance's scale: the quantity's range on these rows, floored for rows that barely move
+            scale = max(np.abs(theirs).max(), 1.0 if name in ("pos", "quat") else 1e-3)
+            worst = int(np.argmax(error))
+            if error[worst] > rel_tol * scale:
+                raise RuntimeError(f"IMU-site {name}: the rigid-body formulas differ from MuJoCo's sensors by "
+                                   f"{error[worst]:.3g} at state row {int(rows[worst])} (allowed {rel_tol:g} x "
+                                   f"{scale:.3g}); the foot model and the formulas no longer describe the same foot")
 
     def sample(self, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray) -> SiteSamples:
         """Evaluate the IMU site's sensors at N prescribed states (each (N, 6): joints x, y, z, yaw, pitch, roll)."""

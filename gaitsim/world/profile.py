@@ -213,7 +213,7 @@ class FootTrajectory:
                 axes[2] += [smooth.Ringing(t_event, imp.ringing_hz, imp.ringing_damping, imp.ringing_accel_mps2)
                             for t_event in (plan.t_ic[k], plan.t_ff[k])]
             if plan.walking[k] and mm.enabled:
-                for a in range(3):
+                for a in np.flatnonzero(mm.creep_velocity_mps):
                     axes[a].append(smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
                                                                mm.creep_velocity_mps[a]))
             self.contact.append(axes)
@@ -222,7 +222,10 @@ class FootTrajectory:
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
         ]
-        ends = [self._stance_heel(k, np.array([plan.t_ic[k], plan.t_to[k]])) for k in range(n + 1)]  # (3, 5, 2)
+        ends = []  # (3, 5, 2) heel stacks at each stance's initial contact and toe off
+        for k in range(n + 1):
+            t_ends = np.array([plan.t_ic[k], plan.t_to[k]])
+            ends.append(self._stance_heel(k, t_ends, self.pitch.stack(t_ends)))
         self._swings = [self._build_swing(k, ends[k][:, :, 1], ends[k + 1][:, :, 0]) for k in range(n)]
         # swing turns of the foot: yaw to the next stance, roll bump
         self._swing_yaw = [smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
@@ -273,37 +276,40 @@ class FootTrajectory:
         return out
 
     def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(2, 5, N) stacks of stance k's foot-flat (roll, yaw) angles, rad: zero before its foot flat, rising
-        through it, held through the push-off, returned to zero over the following swing."""
+        """(2, 5, N) stacks at increasing times ``t`` (s) of stance k's foot-flat (roll, yaw) angles, rad: zero
+        before its foot flat, rising through it, held through the push-off, returned to zero over the following
+        swing; each piece is evaluated on its own window only."""
         out = np.zeros((2, smooth.NDER, t.size))
         if self.rotation is None or k not in self.rotation:
             return out
         for a, pieces in enumerate(self.rotation[k]):
-            out[a] = sum(p.stack(t) for p in pieces)
+            for piece in pieces:
+                smooth.accumulate(out[a], t, piece.t0, piece.t1, piece.stack)
         return out
 
     # -- pieces ---------------------------------------------------------------------------------------------
 
     def _contact_stack(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement."""
+        """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement at increasing times ``t``
+        (s); each piece is evaluated on its own window only."""
         local = np.zeros((3, smooth.NDER, t.size))
         for a in range(3):
             for piece in self.contact[k][a]:
-                local[a] += piece.stack(t)
+                smooth.accumulate(local[a], t, piece.t0, piece.t1, piece.stack)
         return np.einsum("ij,jdn->idn", self.frames[k], local)
 
-    def _stance_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) heel point during [t_ic, t_to] of stance k: the contact displacement plus the roll on the
-        sole along the foot's heading (:class:`RollingSole`); a sustained yaw turns that rolling offset about
-        the vertical through the yaw pivot (a point on the level foot's heel-toe line, carried by the contact
-        displacement)."""
+    def _stance_heel(self, k: int, t: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+        """(3, 5, N) heel point during [t_ic, t_to] of stance k, given the pitch stack (5, N) at ``t``: the
+        contact displacement plus the roll on the sole along the foot's heading (:class:`RollingSole`); a
+        sustained yaw turns that rolling offset about the vertical through the yaw pivot (a point on the level
+        foot's heel-toe line, carried by the contact displacement)."""
         out = self._contact_stack(k, t)
         out[:, 0] += self.heel_base[k][:, None]
-        travel, height = self.sole.heel(self.pitch.stack(t))
+        travel, height = self.sole.heel(pitch)
         heading = np.array([np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k])])
         rolled = heading[:, None, None] * travel
         out[2] += height
-        if self.rotation is not None and k in self.rotation:
+        if self.rotation is not None and k in self.rotation and self.walk.micro.stance_rotation_rate[2]:  # a yaw
             arm = self.walk.micro.stance_yaw_pivot_frac * self.toe_length * heading
             rolled[:, 0] -= arm[:, None]
             cos_y, sin_y = smooth.compose_trig(self._rotation_of(k, t)[1])
@@ -336,27 +342,26 @@ class FootTrajectory:
 
     # -- public ---------------------------------------------------------------------------------------------
 
-    def heel(self, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) derivative stacks of the heel contact point (m, world) at times ``t`` (s)."""
-        t = np.asarray(t, float)
+    def _heel(self, ts: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+        """(3, 5, N) derivative stacks of the heel contact point (m, world) at increasing times ``ts`` (s), given
+        the pitch stack (5, N) there."""
         plan = self.plan
-        out = np.zeros((3, smooth.NDER, t.size))
-        for k in range(plan.n_strides + 1):
-            m = (t >= plan.t_ic[k]) & (t < plan.t_to[k]) if k < plan.n_strides else t >= plan.t_ic[k]
-            if m.any():
-                out[:, :, m] = self._stance_heel(k, t[m])
-            if k < plan.n_strides:
-                m = (t >= plan.t_to[k]) & (t < plan.t_ic[k + 1])
-                if m.any():
-                    out[:, :, m] = self._swing_heel(k, t[m])
+        # stance k: [t_ic[k], t_to[k]) (the last to the end); swing k: [t_to[k], t_ic[k + 1])
+        ic, to = np.searchsorted(ts, plan.t_ic), np.searchsorted(ts, plan.t_to)
+        n = plan.n_strides
+        out = np.zeros((3, smooth.NDER, ts.size))
+        for k in range(n + 1):
+            stance = slice(ic[k], to[k] if k < n else ts.size)
+            if stance.start < stance.stop:
+                out[:, :, stance] = self._stance_heel(k, ts[stance], pitch[:, stance])
+            if k < n and to[k] < ic[k + 1]:
+                out[:, :, to[k]:ic[k + 1]] = self._swing_heel(k, ts[to[k]:ic[k + 1]])
         return out
 
-    def angles(self, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
-        t = np.asarray(t, float)
-        order = np.argsort(t, kind="stable")  # each piece is then evaluated on its window only
-        ts = t[order]
-        roll_yaw = np.zeros((2, smooth.NDER, t.size))
+    def _angles(self, ts: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+        """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at increasing times ``ts`` (s), given the
+        pitch stack (5, N) there; each piece is evaluated on its own window only."""
+        roll_yaw = np.zeros((2, smooth.NDER, ts.size))
         roll, yaw = roll_yaw
         yaw[0] = self.foot_yaw[0]
         for turn, bump in zip(self._swing_yaw, self._swing_roll):
@@ -368,25 +373,51 @@ class FootTrajectory:
             every = [p for axis in pieces for p in axis]
             smooth.accumulate(roll_yaw, ts, min(p.t0 for p in every), max(p.t1 for p in every),
                               lambda times, k=k: self._rotation_of(k, times))
-        out = np.empty((3, smooth.NDER, t.size))
-        out[:, :, order] = np.stack([yaw, self.pitch.stack(ts), roll])
+        return np.stack([yaw, pitch, roll])
+
+    def _sorted(self, t: np.ndarray, *parts) -> np.ndarray:
+        """The stacks ``parts`` (methods of (ts, pitch)) at times ``t`` (s) in any order, stacked: evaluated on
+        the sorted times with one evaluation of the pitch, returned in the order of ``t``."""
+        t = np.asarray(t, float).ravel()
+        order = np.argsort(t, kind="stable")
+        ts = t[order]
+        pitch = self.pitch.stack(ts)
+        stacks = np.concatenate([part(ts, pitch) for part in parts])
+        out = np.empty_like(stacks)
+        out[:, :, order] = stacks
         return out
+
+    def angles(self, t: np.ndarray) -> np.ndarray:
+        """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at times ``t`` (s)."""
+        return self._sorted(t, self._angles)
 
     def joints(self, t: np.ndarray) -> np.ndarray:
         """(6, 5, N) derivative stacks of the joints (x, y, z, yaw, pitch, roll) at times ``t`` (s)."""
-        return np.concatenate([self.heel(t), self.angles(t)])
+        return self._sorted(t, self._heel, self._angles)
 
     def point(self, t: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:
         """(N, 3) m: world position at times ``t`` (s) of the foot point ``lever_arm`` (m, foot frame, from the
         heel contact)."""
-        t = np.asarray(t, float)
-        yaw, pitch, roll = self.angles(t)[:, 0]
-        rotation = quat.to_matrix(quat.from_euler_zyx(yaw, pitch, roll))
-        return self.heel(t)[:, 0, :].T + rotation @ np.asarray(lever_arm, float)
+        return foot_point(self.joints(np.asarray(t, float))[:, 0], lever_arm)
 
-    def stance_displacement(self, lever_arm: np.ndarray = np.zeros(3)) -> np.ndarray:
-        """(n+1, 3) m: exact displacement over foot flat [t_ff, t_ho] of the foot point ``lever_arm`` (m, foot
-        frame; the IMU site's for the truth)."""
+    def sample(self, t: np.ndarray, lever_arm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joint stacks at times ``t`` (s) and the stance displacements of a foot point, in one evaluation.
+
+        Returns
+        -------
+        joints : (6, 5, N) derivative stacks of the joints (:meth:`joints`).
+        stance_displacement : (n+1, 3) m, exact displacement over each foot flat [t_ff, t_ho] of the foot point
+            ``lever_arm`` (m, foot frame; the IMU site's for the truth).
+        """
         p = self.plan
-        ff, ho = np.split(self.point(np.concatenate([p.t_ff, p.t_ho]), lever_arm), 2)
-        return ho - ff
+        n = np.asarray(t).size
+        joints = self.joints(np.concatenate([np.asarray(t, float).ravel(), p.t_ff, p.t_ho]))
+        ff, ho = np.split(foot_point(joints[:, 0, n:], lever_arm), 2)
+        return joints[:, :, :n], ho - ff
+
+
+def foot_point(joints: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:
+    """(N, 3) m: world position of the foot point ``lever_arm`` (m, foot frame, from the heel contact) at joint
+    values ``joints`` (6, N): x, y, z (m) of the heel point, yaw, pitch, roll (rad)."""
+    rotation = quat.to_matrix(quat.from_euler_zyx(*joints[3:]))
+    return joints[:3].T + rotation @ np.asarray(lever_arm, float)

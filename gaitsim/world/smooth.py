@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.polynomial import polynomial as P
-from scipy.interpolate import PPoly
 
 ORDER = 4  # highest derivative kept continuous
 NDER = ORDER + 1
@@ -26,29 +25,38 @@ PULSE_AREA = float(P.polyval(1.0, P.polyint(PULSE)))  # integral of PULSE over [
 
 
 class Piecewise:
-    """A scalar C4 function of time built from a :class:`scipy.interpolate.PPoly`, held constant outside.
+    """A scalar C4 function of time, piecewise polynomial (:class:`scipy.interpolate.PPoly`'s layout), held
+    constant outside its breakpoint range.
 
     Parameters
     ----------
-    pp : PPoly
-        The function on its breakpoint range ``[pp.x[0], pp.x[-1]]``.
+    coef : (k+1, m) coefficients of each of the m pieces in powers of ``t - breaks[i]``, highest power first.
+    breaks : (m+1,) s, increasing breakpoints.
     """
 
-    def __init__(self, pp: PPoly):
-        self.pp = pp
-        self.t0 = float(pp.x[0])
-        self.t1 = float(pp.x[-1])
-        self.before = float(pp(self.t0))
-        self.after = float(pp(self.t1))
-        self._left = pp.x[:-1].copy()  # left end of each piece (s)
-        self._interior = pp.x[1:-1].copy()  # breakpoints between pieces (s)
+    def __init__(self, coef: np.ndarray, breaks: np.ndarray):
+        self.coef = np.asarray(coef, float)
+        self.breaks = np.asarray(breaks, float)
+        self.t0 = float(self.breaks[0])
+        self.t1 = float(self.breaks[-1])
+        self.before = power_sum(self.coef[:, 0], 0.0)
+        self.after = power_sum(self.coef[:, -1], self.t1 - float(self.breaks[-2]))
+        self._left = self.breaks[:-1]  # left end of each piece (s)
+        self._interior = self.breaks[1:-1]  # breakpoints between pieces (s)
         # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (k+1, 5, m)
-        order = pp.c.shape[0]
-        powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of pp.c
-        self._coef = np.zeros((order, NDER, pp.c.shape[1]))
-        self._coef[:, 0] = pp.c
+        order = self.coef.shape[0]
+        powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of coef
+        self._coef = np.zeros((order, NDER, self.coef.shape[1]))
+        self._coef[:, 0] = self.coef
         for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
             self._coef[1:, j] = (self._coef[:, j - 1] * powers)[:-1]
+
+    @property
+    def pp(self):
+        """The function on its breakpoint range as a :class:`scipy.interpolate.PPoly` (for checks)."""
+        from scipy.interpolate import PPoly
+
+        return PPoly(self.coef, self.breaks)
 
     def stack(self, t: np.ndarray) -> np.ndarray:
         """Derivative stack (5, N) at times ``t`` (s). Outside the range: held value, zero derivatives.
@@ -60,10 +68,15 @@ class Piecewise:
         inside = (t >= self.t0) & (t <= self.t1)
         if inside.any():
             ti = t[inside]
-            piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
-            local = ti - self._left[piece]
-            coef = self._coef[:, :, piece]  # (k+1, 5, n)
-            value = coef[0].copy()
+            if self._interior.size:
+                piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
+                local = ti - self._left[piece]
+                coef = self._coef[:, :, piece]  # (k+1, 5, n)
+            else:  # one piece: its coefficients broadcast over the samples
+                local = ti - self._left[0]
+                coef = self._coef  # (k+1, 5, 1)
+            value = np.empty((NDER, ti.size))
+            value[:] = coef[0]
             for c in coef[1:]:
                 value *= local
                 value += c
@@ -131,14 +144,34 @@ def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
     tail = (stacks[1:] * powers - head @ _HEAD.T) @ _TAIL_INVERSE.T
     a = np.concatenate([head, tail], axis=1)  # (K-1, 10) in u
     coef = a / h ** np.arange(2 * NDER)  # in t - t_i
-    return Piecewise(PPoly(coef[:, ::-1].T.copy(), knots))
+    return Piecewise(coef[:, ::-1].T.copy(), knots)
 
 
-def scaled_poly(shape: np.ndarray, t0: float, duration: float, amplitude: float) -> PPoly:
-    """``amplitude * shape((t - t0) / duration)`` on [t0, t0 + duration] as a one-piece PPoly."""
+def power_sum(column: np.ndarray, local: float) -> float:
+    """Value at ``local`` (s from the piece's left end) of one piece's polynomial (``column``: coefficients,
+    highest power first), summed from the lowest power up as :class:`scipy.interpolate.PPoly` evaluates it."""
+    value, power = 0.0, 1.0
+    for c in column[::-1].tolist():
+        value += c * power
+        power *= local
+    return value
+
+
+def antiderivative(coef: np.ndarray, breaks: np.ndarray) -> np.ndarray:
+    """Coefficients (k+2, m) of the antiderivative, zero at ``breaks[0]`` and continuous, of the piecewise
+    polynomial ``coef`` (k+1, m) (highest power first): the arithmetic of ``PPoly.antiderivative``."""
+    out = np.zeros((coef.shape[0] + 1, coef.shape[1]))
+    out[:-1] = coef / np.arange(coef.shape[0], 0, -1, dtype=float)[:, None]
+    for i in range(1, coef.shape[1]):
+        out[-1, i] = power_sum(out[:, i - 1], float(breaks[i] - breaks[i - 1]))
+    return out
+
+
+def scaled_poly(shape: np.ndarray, t0: float, duration: float, amplitude: float) -> np.ndarray:
+    """(len(shape), 1) coefficients, highest power first, of ``amplitude * shape((t - t0) / duration)`` in
+    powers of ``t - t0`` (one piece on [t0, t0 + duration])."""
     powers = duration ** -np.arange(len(shape), dtype=float)
-    coef = (amplitude * shape * powers)[::-1][:, None]  # PPoly wants highest power first
-    return PPoly(coef, [t0, t0 + duration])
+    return (amplitude * shape * powers)[::-1][:, None]
 
 
 def pulse_displacement(t0: float, duration: float, peak_velocity: float) -> Piecewise:
@@ -146,34 +179,32 @@ def pulse_displacement(t0: float, duration: float, peak_velocity: float) -> Piec
 
     The displacement is 0 before ``t0`` and ``peak_velocity * duration * PULSE_AREA`` after the pulse.
     """
-    return Piecewise(scaled_poly(PULSE, t0, duration, peak_velocity).antiderivative())
+    breaks = np.array([t0, t0 + duration])
+    return Piecewise(antiderivative(scaled_poly(PULSE, t0, duration, peak_velocity), breaks), breaks)
 
 
 def plateau_displacement(t_up: float, t_down: float, ramp: float, velocity: float) -> Piecewise:
     """Displacement (m) of a velocity plateau: C4 ramp up on [t_up - ramp, t_up], hold, ramp down on
     [t_down, t_down + ramp]. The velocity is ``velocity`` (m/s) on [t_up, t_down]."""
-    up = scaled_poly(SMOOTHSTEP, t_up - ramp, ramp, velocity)
-    down = scaled_poly(-SMOOTHSTEP, t_down, ramp, velocity)
-    down.c[-1, 0] += velocity  # 1 - smoothstep
-    hold = PPoly(np.array([[velocity]]), [t_up, t_down])
     coef = np.zeros((len(SMOOTHSTEP), 3))
-    coef[:, 0] = up.c[:, 0]
-    coef[-1, 1] = hold.c[0, 0]
-    coef[:, 2] = down.c[:, 0]
-    vel = PPoly(coef, [t_up - ramp, t_up, t_down, t_down + ramp])
-    return Piecewise(vel.antiderivative())
+    coef[:, :1] = scaled_poly(SMOOTHSTEP, t_up - ramp, ramp, velocity)
+    coef[-1, 1] = velocity
+    coef[:, 2:] = scaled_poly(-SMOOTHSTEP, t_down, ramp, velocity)
+    coef[-1, 2] += velocity  # 1 - smoothstep
+    breaks = np.array([t_up - ramp, t_up, t_down, t_down + ramp])
+    return Piecewise(antiderivative(coef, breaks), breaks)
 
 
 def lift(t0: float, duration: float, height: float) -> Piecewise:
     """``height * LIFT((t - t0)/duration)`` (m or rad): a C4 bump over [t0, t0 + duration], zero outside."""
-    return Piecewise(scaled_poly(LIFT, t0, duration, height))
+    return Piecewise(scaled_poly(LIFT, t0, duration, height), np.array([t0, t0 + duration]))
 
 
 def smoothstep(t0: float, duration: float, start: float, end: float) -> Piecewise:
     """A C4 transition from ``start`` to ``end`` over [t0, t0 + duration], held outside."""
-    pp = scaled_poly(SMOOTHSTEP, t0, duration, end - start)
-    pp.c[-1, 0] += start
-    return Piecewise(pp)
+    coef = scaled_poly(SMOOTHSTEP, t0, duration, end - start)
+    coef[-1, 0] += start
+    return Piecewise(coef, np.array([t0, t0 + duration]))
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -240,13 +271,14 @@ class Ringing:
         self.amp = accel / w**2
         self.period = 1.0 / freq_hz
         self.duration = max(np.log(100.0) / (zeta * w), 3 * self.period)
+        self.t1 = t0 + self.duration  # zero outside [t0, t1]
         self.rise = smoothstep(t0, self.period, 0.0, 1.0)
         self.fade = smoothstep(t0 + self.duration - self.period, self.period, 1.0, 0.0)
 
     def stack(self, t: np.ndarray) -> np.ndarray:
         t = np.asarray(t, float)
         out = np.zeros((NDER, t.size))
-        m = (t >= self.t0) & (t <= self.t0 + self.duration)
+        m = (t >= self.t0) & (t <= self.t1)
         if not m.any():
             return out
         s = t[m] - self.t0

@@ -1,4 +1,8 @@
-"""Ground truth of a walk: plan the stances, build the C4 joint trajectories, sample MuJoCo's IMU-site sensors.
+"""Ground truth of a walk: plan the stances, build the C4 joint trajectories, evaluate the IMU site's kinematics.
+
+The site's kinematics come from the rigid-body formulas of the MuJoCo foot model, for all samples at once, and
+are checked against MuJoCo's own sensors (``mj_inverse``) on every ``CHECK_EVERY``-th sample and the samples at
+every gait event.
 
 The world knows nothing of sensors or scenario files: :mod:`gaitsim.simulate` turns a scenario into the inputs
 of :func:`simulate_truth` and puts the sensor model on its output.
@@ -14,6 +18,8 @@ from nav.recording import Events, Truth
 from .foot import FootModel, Mount
 from .gait import StancePlan, Walk, plan_stances
 from .profile import FootTrajectory
+
+CHECK_EVERY = 100  # every how many samples the rigid-body kinematics are checked against MuJoCo's sensors
 
 
 def increments(t: np.ndarray, vel: np.ndarray, q: np.ndarray, gravity: float) -> tuple[np.ndarray, np.ndarray]:
@@ -43,6 +49,14 @@ def stance_labels(t: np.ndarray, plan: StancePlan) -> np.ndarray:
     return inside
 
 
+def check_rows(t: np.ndarray, plan: StancePlan) -> np.ndarray:
+    """Sample rows on which the kinematics are checked against MuJoCo: every ``CHECK_EVERY``-th, the last,
+    and those at or just after each gait event (heel strike, foot flat, heel off, toe off)."""
+    events = np.concatenate([plan.t_ic, plan.t_ff, plan.t_ho, plan.t_to])
+    at_events = np.minimum(np.searchsorted(t, events), t.size - 1)
+    return np.unique(np.concatenate([np.arange(0, t.size, CHECK_EVERY), [t.size - 1], at_events]))
+
+
 def simulate_truth(walk: Walk, mount: Mount, rate_hz: float, gravity: float,
                    gait_rng: np.random.Generator) -> tuple[Truth, Events]:
     """Truth and events of one walk sampled at ``rate_hz`` (Hz) under ``gravity`` (m/s^2), the IMU at ``mount``
@@ -52,11 +66,13 @@ def simulate_truth(walk: Walk, mount: Mount, rate_hz: float, gravity: float,
     traj = FootTrajectory(walk, plan, foot.toe_length)
     n = int(np.floor(plan.t_end * rate_hz + 1e-9)) + 1
     t = np.arange(n) / rate_hz
-    joints = traj.joints(t)
-    s = foot.sample(joints[:, 0].T, joints[:, 1].T, joints[:, 2].T)
+    joints, displacement = traj.sample(t, foot.lever_arm)
+    qpos, qvel, qacc = joints[:, 0].T, joints[:, 1].T, joints[:, 2].T
+    s = foot.kinematics(qpos, qvel, qacc)
+    foot.check(qpos, qvel, qacc, s, check_rows(t, plan))
     dv, dth = increments(t, s.vel, s.quat, gravity)
     truth = Truth(t=t, pos=s.pos, vel=s.vel, quat=s.quat, gyr=s.gyr, acc=s.acc, dv=dv, dth=dth,
                   stance=stance_labels(t, plan))
     events = Events(t_ic=plan.t_ic, t_ff=plan.t_ff, t_ho=plan.t_ho, t_to=plan.t_to,
-                    stance_displacement=traj.stance_displacement(foot.lever_arm))
+                    stance_displacement=displacement)
     return truth, events

@@ -1,0 +1,81 @@
+"""`gaitsim generate` end to end: simulated seconds per wall second, interpreter start and imports included.
+
+    PYTHONPATH=$PWD python benchmarks/generate_speed.py [--runs 1] [--repeats 3]
+
+Times ``python3 -m gaitsim.cli generate scenarios/paper.toml --out DIR --runs N --no-progress`` as a fresh
+process started in the repository root (so this checkout's code runs), best of ``--repeats``, and prints real
+time (the recordings' simulated duration) over wall time. Then, in this process (imports already paid), the
+split of one run over the steps ``generate`` takes: the truth (``simulate_world``), the sensor (``sense``) and
+writing the folder (``write_recording_into``); what the end-to-end wall time has beyond their sum is interpreter
+start, imports (some on first use: scipy.signal, numba's cached kernels) and the scenario's parsing. Timings are informative only: other jobs share the machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "scenarios/paper.toml"
+
+
+def end_to_end(runs: int, repeats: int) -> tuple[float, float]:
+    """(best wall time s, simulated s of all runs) of the generate command as a fresh process."""
+    from nav.recording import list_runs, read_recording
+
+    best = float("inf")
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(repeats):
+            out = Path(tmp) / f"out{i}"
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "gaitsim.cli", "generate", str(SCENARIO), "--out", str(out),
+                            "--runs", str(runs), "--no-progress"], cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
+            best = min(best, time.perf_counter() - t0)
+        folders = list_runs(out) if runs > 1 else [out]
+        simulated = sum(float(read_recording(f).t[-1] - read_recording(f).t[0]) for f in folders)
+    return best, simulated
+
+
+def split() -> dict[str, float]:
+    """Wall seconds of each step of one run, in this process."""
+    from gaitsim.scenario import load_scenario
+    from gaitsim.simulate import sense, simulate_world
+    from nav.recording import write_recording_into
+
+    scenario = load_scenario(SCENARIO)
+    sense(*simulate_world(scenario, scenario.seed), scenario.sensor, scenario.seed)  # warm: lazy imports, numba
+    times = {}
+    t0 = time.perf_counter()
+    world = simulate_world(scenario, scenario.seed)
+    times["truth (simulate_world)"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    rec = sense(*world, scenario.sensor, scenario.seed)
+    times["sensor (sense)"] = time.perf_counter() - t0
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        write_recording_into(rec, Path(tmp))
+        times["writing (write_recording_into)"] = time.perf_counter() - t0
+    return times
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=1, help="runs generated per command (default 1)")
+    parser.add_argument("--repeats", type=int, default=3, help="commands timed; the best counts (default 3)")
+    args = parser.parse_args()
+    wall, simulated = end_to_end(args.runs, args.repeats)
+    print(f"gaitsim generate {SCENARIO.relative_to(ROOT)} --runs {args.runs}: {simulated:.1f} s simulated in "
+          f"{wall:.2f} s wall (best of {args.repeats}) -> {simulated / wall:.0f}x real time")
+    steps = split()
+    for name, seconds in steps.items():
+        print(f"  {name:32s} {seconds:6.3f} s")
+    rest = wall / args.runs - sum(steps.values())
+    print(f"  {'start, imports, rest (per run)':32s} {rest:6.3f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,27 @@
+"""Tables written block by block (formatting and compression overlapped) hold the bytes of the one-piece text."""
+
+import gzip
+import zlib
+
+import numpy as np
+import pytest
+
+from nav import storage
+
+HEADER = ("t", "pos_x", "acc_x")
+
+
+@pytest.mark.parametrize("rows", [0, 1, storage.TEXT_BLOCK_ROWS, 2 * storage.TEXT_BLOCK_ROWS + 5])
+@pytest.mark.parametrize("form", storage.FORMS)
+def test_written_table_is_the_table_text(tmp_path, rows, form):
+    table = np.random.default_rng(rows).normal(size=(rows, 3)) * [1.0, 100.0, 1e-7]
+    path = tmp_path / f"table.{form}"
+    storage.write_table(path, HEADER, table, {"pos": 9})
+    text = storage.table_text(HEADER, table, {"pos": 9})
+    data = path.read_bytes()
+    if form == "csv.gz":
+        assert gzip.decompress(data).decode() == text
+        assert data == zlib.compress(text.encode(), storage.GZIP_LEVEL, 16 + zlib.MAX_WBITS)  # one stream, mtime 0
+    else:
+        assert data.decode() == text
+    assert text.count("\n") == rows + 1
