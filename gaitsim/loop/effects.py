@@ -19,10 +19,11 @@ re-run the sensor model on the cached walk).
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
 | accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
+| accel_bias_x, _y, _z | [sensor] accel_bias, one component + b | m/s^2 | stride closure, rest_acc_norm, acc profiles, navigation |
 | g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
 
-The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, time and
+The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, bias, time and
 g-sensitivity errors apart: each turns gravity or the specific force its own way while the foot pitches. The
 ``rest_gyro_change`` and ``rest_acc_change`` residuals (a sensor drift between the first and the last rest) are
 moved by no effect: a drifting bias is outside the library and is reported unexplained.
@@ -136,6 +137,25 @@ def _scale_guess(res, ctx):
     return None if m is None else 100.0 * (m / w - 1.0)
 
 
+def _bias_guess(axis: int):
+    """Closed-form first guess of an accelerometer bias on ``axis`` from the rest norm: the norm residual over
+    that axis's share of the rest specific force (None where the axis is near horizontal at rest: the norm
+    cannot see it there)."""
+    def guess(res, ctx):
+        value = _value(res, "rest_acc_norm")
+        rest = np.asarray(ctx["rest_specific_force"], float)
+        share = rest[axis] / max(float(np.linalg.norm(rest)), 1e-9)
+        return None if value is None or abs(share) < 0.5 else value / share
+    return guess
+
+
+def _biased_axis(bias, axis: int, mps2: float) -> list:
+    """The twin's accelerometer bias (m/s^2) with ``mps2`` added on ``axis``."""
+    out = np.array(bias, float)
+    out[axis] += mps2
+    return out.tolist()
+
+
 def _sensor(**items) -> dict:
     return {"sensor": items}
 
@@ -203,6 +223,11 @@ LIBRARY: tuple[Effect, ...] = (
              lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}))
       for sensor, label, profiles, extra in (("gyro", "gyro", GYR_PROFILES, ()),
                                              ("accel", "accelerometer", ACC_PROFILES, ("rest_acc_norm",)))
+      for i, axis in enumerate("xyz")),
+    *(Effect(f"accel_bias_{axis}", f"accelerometer bias of the sensor's {axis} axis",
+             f"[sensor] accel_bias[{i}]", "m/s^2", CLOSURE + ACC_PROFILES + NAV + ("rest_acc_norm",), (-1.5, 1.5),
+             lambda m, ctx, i=i: _sensor(accel_bias=[_biased_axis(ctx["accel_bias"], i, m), "m/s^2"]),
+             _bias_guess(i))
       for i, axis in enumerate("xyz")),
     Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's; the "
            "twin's gyro bias, found at rest where the g-sensitivity acts too, loses k times the rest specific force)",
@@ -278,6 +303,8 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
                                              if twin.sensor is not None else np.zeros((3, 3))).tolist(),
             "gyro_bias_rad_s": (np.asarray(twin.sensor["gyro_bias"]) if twin.sensor is not None
                                 else np.zeros(3)).tolist(),
+            "accel_bias": (np.asarray(twin.sensor["accel_bias"]) if twin.sensor is not None
+                           else np.zeros(3)).tolist(),
             "rest_specific_force": rec.acc[measured.stationary].mean(0).tolist()}
 
 
