@@ -26,7 +26,8 @@
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
 5. the effect that leaves the smallest misfit (Q over all signature residuals) is added to the twin when it
-   lowers that misfit, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual,
+   lowers that misfit, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to
+   the noise level,
    lowers Q, and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
@@ -203,6 +204,7 @@ class Fit:
     harmed: tuple = ()
     total_before: float = math.nan
     total_after: float = math.nan
+    acted_at_noise_level: bool = False
 
     def summary(self) -> dict:
         return {"effect": self.effect.name, "magnitude": self.magnitude, "unit": self.effect.unit,
@@ -218,8 +220,8 @@ class Fit:
 
     @property
     def acceptable(self) -> bool:
-        return (self.identifiable and self.fraction >= settings.EXPLAINED_FRACTION and self.q_after < self.q_before
-                and self.total_after < self.total_before and not self.harmed)
+        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.acted_at_noise_level)
+                and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed)
 
 
 def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
@@ -290,6 +292,7 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
                    and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
     signature_names = [n for n in base if not n.startswith("nav_") and n not in settings.DERIVED]
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed,
+                               acted_at_noise_level=bool(acted in res and res[acted].at_noise_level),
                                total_before=_q(base, signature_names), total_after=_q(res, signature_names))
 
 

@@ -19,7 +19,7 @@ re-run the sensor model on the cached walk).
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
 | accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
-| accel_bias_x, _y, _z | [sensor] accel_bias, one component + b | m/s^2 | stride closure, rest_acc_norm, acc profiles, navigation |
+| accel_bias_x, _y, _z | [sensor] accel_bias, one component + b (mount tilt kept on the rest reading) | m/s^2 | stride closure, rest_acc_norm, acc profiles, navigation |
 | g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
 
@@ -41,6 +41,7 @@ from typing import Callable
 import numpy as np
 
 from nav import quaternion as quat
+from nav.alignment import tilt_from_specific_force
 from nav.recording import Recording
 
 from ..scenario import Scenario, section_table
@@ -149,11 +150,19 @@ def _bias_guess(axis: int):
     return guess
 
 
-def _biased_axis(bias, axis: int, mps2: float) -> list:
-    """The twin's accelerometer bias (m/s^2) with ``mps2`` added on ``axis``."""
-    out = np.array(bias, float)
-    out[axis] += mps2
-    return out.tolist()
+def _bias_changes(axis: int, mps2: float, ctx: dict) -> dict:
+    """The twin's accelerometer bias with ``mps2`` (m/s^2) added on ``axis``, and its mount roll and pitch
+    turned by what that bias changes in the tilt read from the rest specific force: the twin's tilt was read
+    from the recording at rest, where the bias acts too, so the twin's rest reading must stay the recording's
+    (a bias on a horizontal axis is otherwise a mount pitch or roll at rest; the stride closure tells them
+    apart)."""
+    bias = np.array(ctx["accel_bias"], float)
+    rest = np.asarray(ctx["rest_specific_force"], float)
+    old = np.array(tilt_from_specific_force(rest - bias))
+    bias[axis] += mps2
+    roll, pitch = np.asarray(ctx["mount_roll_pitch_rad"]) + np.array(tilt_from_specific_force(rest - bias)) - old
+    return _sensor(accel_bias=[bias.tolist(), "m/s^2"],
+                   mounting_misalignment=[[float(roll), float(pitch), ctx["mount_yaw_rad"]], "rad"])
 
 
 def _sensor(**items) -> dict:
@@ -226,8 +235,7 @@ LIBRARY: tuple[Effect, ...] = (
       for i, axis in enumerate("xyz")),
     *(Effect(f"accel_bias_{axis}", f"accelerometer bias of the sensor's {axis} axis",
              f"[sensor] accel_bias[{i}]", "m/s^2", CLOSURE + ACC_PROFILES + NAV + ("rest_acc_norm",), (-1.5, 1.5),
-             lambda m, ctx, i=i: _sensor(accel_bias=[_biased_axis(ctx["accel_bias"], i, m), "m/s^2"]),
-             _bias_guess(i))
+             lambda m, ctx, i=i: _bias_changes(i, m, ctx), _bias_guess(i))
       for i, axis in enumerate("xyz")),
     Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's; the "
            "twin's gyro bias, found at rest where the g-sensitivity acts too, loses k times the rest specific force)",
@@ -297,6 +305,7 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
             "creep_mps": float(micro["creep_velocity_mps"][0]),
             "stance_roll_rate_dps": float(micro["stance_roll_rate_dps"]),
             "mount_roll_pitch_rad": [float(roll), float(pitch)],
+            "mount_yaw_rad": float(yaw),
             **{key: (np.asarray(twin.sensor[key]) if twin.sensor is not None else np.eye(3)).tolist()
                for key in ("gyro_misalignment", "accel_misalignment")},
             "gyro_g_sensitivity": np.degrees(np.asarray(twin.sensor["gyro_g_sensitivity"])

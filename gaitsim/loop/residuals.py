@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import settings
-from .signature import CHANNELS, Signature, curve_shift_ms, mean_se
+from .signature import CHANNELS, Signature
 
 UNITS = {
     "stance_gyro": "deg/s", **{f"stance_rate_{a}": "deg/s" for a in "xyz"}, "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
@@ -77,13 +77,6 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         if w is None or not (math.isfinite(m.value) and math.isfinite(w.value)):
             continue
         out[name] = Residual(name, UNITS[name], m.value, w.value, m.value - w.value, uncertainty(name, m.se, w.se))
-    if measured.lag_curves.shape[1:] == twin.lag_curves.shape[1:]:
-        template = np.nanmean(twin.lag_curves, axis=0)
-        m = mean_se(curve_shift_ms(measured.lag_curves, template, measured.rate_hz))
-        w = mean_se(curve_shift_ms(twin.lag_curves, template, twin.rate_hz))
-        if math.isfinite(m.value) and math.isfinite(w.value):
-            out["acc_gyro_lag"] = Residual("acc_gyro_lag", UNITS["acc_gyro_lag"], m.value, w.value,
-                                           m.value - w.value, uncertainty("acc_gyro_lag", m.se, w.se))
     for c in CHANNELS:
         m, w = measured.profiles[c], twin.profiles[c]
         name = f"profile_{c}"

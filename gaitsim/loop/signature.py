@@ -22,10 +22,11 @@ simulated, so two signatures can be compared number by number:
                                          the Nyquist frequency exceeds HF_NYQUIST_MARGIN times the edge)
    onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
                                          ONSET_WINDOW_S of the stance (impact ringing lives here)
-   acc_gyro_lag                ms        shift of the stride's cross-correlation curve of |a| with |dw/dt|
-                                         (band-passed, +-LAG_WINDOW_S) against the twin's mean curve; set by
-                                         residuals.compare (the twin's strides against their own mean give
-                                         its spread), so a pure relative delay of the gyro shows as its value
+   acc_gyro_lag                ms        lag of the peak of the strides' mean cross-correlation curve of
+                                         band-passed |a| with |dw/dt| (+-LAG_WINDOW_S; > 0: the gyro's
+                                         feature follows the accelerometer's), so a pure relative delay of
+                                         the gyro adds itself; uncertainty by jackknife over strides (a single
+                                         stride's curve has several peaks of similar height)
    swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
                                          momentum direction of the gyro, sign so that y > 0)
    stance_velocity             m/s       forward velocity of the position track (reference or truth) over
@@ -98,7 +99,6 @@ class Signature:
     stances : (n, 2) int, sample indices of each used stride's detected stance (start, end).
     rate_hz : median sample rate.
     spectrum : (frequencies Hz, mean power of |a| per stride, normalised to unit total) for figures.
-    lag_curves : (n, L) per-stride |a| x |dw/dt| cross-correlation curves (for ``acc_gyro_lag``).
     stationary : (N,) bool, the SHOE detection the strides were cut from (the twin fit re-uses it).
     gravity : m/s^2, the gravity that detection assumed (the recording's).
     """
@@ -109,7 +109,6 @@ class Signature:
     stances: np.ndarray
     rate_hz: float
     spectrum: tuple
-    lag_curves: np.ndarray
     stationary: np.ndarray
     gravity: float
 
@@ -141,34 +140,45 @@ def _band_pass(x: np.ndarray, rate_hz: float, band: tuple = settings.LAG_BAND_HZ
 
 
 def _xcorr_curve(gyr: np.ndarray, acc_norm: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Normalised cross-correlation of band-passed |a| with band-passed |dw/dt| at lags -L..L samples."""
+    """Normalised cross-correlation of band-passed |a| with band-passed |dw/dt| at lags -L..L samples in steps
+    of 1 / ``settings.LAG_UPSAMPLE`` sample: the inverse transform of their cross-spectrum, zero-padded (both
+    are band-limited, so the curve between samples is their correlation at a fractional lag, not an
+    interpolation)."""
     a = _band_pass(acc_norm, rate_hz)
     g = _band_pass(np.linalg.norm(np.gradient(gyr, axis=0), axis=1) * rate_hz, rate_hz)
     max_lag = max(2, int(round(settings.LAG_WINDOW_S * rate_hz)))
+    up = settings.LAG_UPSAMPLE
     n = len(a)
     if n <= 2 * max_lag + 4:
-        return np.full(2 * max_lag + 1, math.nan)
-    corr = np.array([np.dot(a[max_lag:n - max_lag], g[max_lag + k:n - max_lag + k])
-                     for k in range(-max_lag, max_lag + 1)])
+        return np.full(2 * max_lag * up + 1, math.nan)
+    corr = np.fft.irfft(np.conj(np.fft.rfft(a)) * np.fft.rfft(g), n * up) * up
+    corr = np.concatenate([corr[-max_lag * up:], corr[:max_lag * up + 1]])
     scale = np.linalg.norm(a) * np.linalg.norm(g)
     return corr / scale if scale > 0 else corr
 
 
-def curve_shift_ms(curves: np.ndarray, template: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Shift (ms) of each curve (n, L) against ``template`` (L,) by least squares on an upsampled grid;
-    positive: the gyro feature comes later relative to the accelerometer feature than in the template."""
-    lags = np.arange(len(template)) - len(template) // 2
-    fine = np.linspace(lags[0], lags[-1], (len(lags) - 1) * settings.LAG_UPSAMPLE + 1)
-    inner = np.abs(fine) <= lags[-1] / 2
-    shifts = fine[inner]
-    tmpl = np.interp(fine, lags, template)
-    shifted = np.interp((fine[inner][None, :] - shifts[:, None]).ravel(), fine, tmpl).reshape(len(shifts), -1)
-    out = np.full(len(curves), math.nan)
-    for k, c in enumerate(curves):
-        if np.all(np.isfinite(c)):
-            cost = np.sum((np.interp(fine, lags, c)[inner][None, :] - shifted) ** 2, axis=1)
-            out[k] = shifts[int(np.argmin(cost))]
-    return 1000.0 * out / rate_hz
+def _peak_lag_ms(curve: np.ndarray, rate_hz: float) -> float:
+    """Lag (ms) of the highest point of a cross-correlation curve of :func:`_xcorr_curve`; NaN when the peak
+    lies on the window's edge."""
+    k = int(np.argmax(curve))
+    if not 0 < k < len(curve) - 1:
+        return math.nan
+    return 1000.0 * (k - len(curve) // 2) / (settings.LAG_UPSAMPLE * rate_hz)
+
+
+def lag_scalar(curves: np.ndarray, rate_hz: float) -> Scalar:
+    """``acc_gyro_lag`` from the per-stride curves (n, L): the peak lag of their mean, with its jackknife
+    standard error (the samples are the jackknife pseudo-values)."""
+    curves = curves[np.all(np.isfinite(curves), axis=1)]
+    n = len(curves)
+    if n < 2:
+        return Scalar(math.nan, math.nan, np.empty(0))
+    whole = _peak_lag_ms(curves.mean(0), rate_hz)
+    left_out = np.array([_peak_lag_ms((curves.sum(0) - c) / (n - 1), rate_hz) for c in curves])
+    pseudo = n * whole - (n - 1) * left_out
+    pseudo = pseudo[np.isfinite(pseudo)]
+    se = float(np.std(pseudo, ddof=1) / math.sqrt(len(pseudo))) if len(pseudo) > 1 else math.nan
+    return Scalar(whole, se, pseudo)
 
 
 def _swing_axis_yaw(gyr: np.ndarray) -> float:
@@ -249,9 +259,10 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
                                       rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
     for name, column in zip(CLOSURE, np.column_stack([closing.velocity, np.degrees(closing.tilt[:, :2])]).T):
         scalars[name] = mean_se(column)
-    curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
+    scalars["acc_gyro_lag"] = lag_scalar(np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate)
+                                                   for s0, s1 in strides]), rate)
     return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
-                     _spectrum(acc_norm, strides, rate), curves, result.stationary, float(gravity))
+                     _spectrum(acc_norm, strides, rate), result.stationary, float(gravity))
 
 
 def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat: np.ndarray,
