@@ -22,11 +22,12 @@ simulated, so two signatures can be compared number by number:
                                          the Nyquist frequency exceeds HF_NYQUIST_MARGIN times the edge)
    onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
                                          ONSET_WINDOW_S of the stance (impact ringing lives here)
-   acc_gyro_lag                ms        lag of the peak of the strides' mean cross-correlation curve of
-                                         band-passed |a| with |dw/dt| (+-LAG_WINDOW_S; > 0: the gyro's
-                                         feature follows the accelerometer's), so a pure relative delay of
-                                         the gyro adds itself; uncertainty by jackknife over strides (a single
-                                         stride's curve has several peaks of similar height)
+   acc_gyro_lag                ms        shift of the strides' mean cross-correlation curve of band-passed
+                                         |a| with |dw/dt| (+-LAG_WINDOW_S) against the twin's mean curve (>0:
+                                         the gyro's features come later); set by residuals.compare, with a
+                                         jackknife over the strides of both for its uncertainty (a single
+                                         stride's curve has several lobes of similar height), so a pure
+                                         relative delay of the gyro shows as its value
    swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
                                          momentum direction of the gyro, sign so that y > 0)
    stance_velocity             m/s       forward velocity of the position track (reference or truth) over
@@ -99,6 +100,7 @@ class Signature:
     stances : (n, 2) int, sample indices of each used stride's detected stance (start, end).
     rate_hz : median sample rate.
     spectrum : (frequencies Hz, mean power of |a| per stride, normalised to unit total) for figures.
+    lag_curves : (n, L) per-stride |a| x |dw/dt| cross-correlation curves (for ``acc_gyro_lag``).
     stationary : (N,) bool, the SHOE detection the strides were cut from (the twin fit re-uses it).
     gravity : m/s^2, the gravity that detection assumed (the recording's).
     """
@@ -109,6 +111,7 @@ class Signature:
     stances: np.ndarray
     rate_hz: float
     spectrum: tuple
+    lag_curves: np.ndarray
     stationary: np.ndarray
     gravity: float
 
@@ -157,28 +160,17 @@ def _xcorr_curve(gyr: np.ndarray, acc_norm: np.ndarray, rate_hz: float) -> np.nd
     return corr / scale if scale > 0 else corr
 
 
-def _peak_lag_ms(curve: np.ndarray, rate_hz: float) -> float:
-    """Lag (ms) of the highest point of a cross-correlation curve of :func:`_xcorr_curve`; NaN when the peak
-    lies on the window's edge."""
-    k = int(np.argmax(curve))
-    if not 0 < k < len(curve) - 1:
+def curve_shift_ms(curve: np.ndarray, template: np.ndarray, rate_hz: float) -> float:
+    """Shift (ms) of a cross-correlation curve of :func:`_xcorr_curve` against ``template`` by least squares
+    over the inner half of the lag window (shifts up to half the window); positive: the gyro's features come
+    later relative to the accelerometer's than in the template. NaN for a curve with NaN."""
+    if not (np.all(np.isfinite(curve)) and np.all(np.isfinite(template))):
         return math.nan
-    return 1000.0 * (k - len(curve) // 2) / (settings.LAG_UPSAMPLE * rate_hz)
-
-
-def lag_scalar(curves: np.ndarray, rate_hz: float) -> Scalar:
-    """``acc_gyro_lag`` from the per-stride curves (n, L): the peak lag of their mean, with its jackknife
-    standard error (the samples are the jackknife pseudo-values)."""
-    curves = curves[np.all(np.isfinite(curves), axis=1)]
-    n = len(curves)
-    if n < 2:
-        return Scalar(math.nan, math.nan, np.empty(0))
-    whole = _peak_lag_ms(curves.mean(0), rate_hz)
-    left_out = np.array([_peak_lag_ms((curves.sum(0) - c) / (n - 1), rate_hz) for c in curves])
-    pseudo = n * whole - (n - 1) * left_out
-    pseudo = pseudo[np.isfinite(pseudo)]
-    se = float(np.std(pseudo, ddof=1) / math.sqrt(len(pseudo))) if len(pseudo) > 1 else math.nan
-    return Scalar(whole, se, pseudo)
+    half = len(template) // 2
+    shifts = np.arange(-(half // 2), half // 2 + 1)
+    inner = slice(half - half // 2, half + half // 2 + 1)
+    cost = [np.sum((curve[inner] - template[inner.start - k:inner.stop - k]) ** 2) for k in shifts]
+    return 1000.0 * float(shifts[int(np.argmin(cost))]) / (settings.LAG_UPSAMPLE * rate_hz)
 
 
 def _swing_axis_yaw(gyr: np.ndarray) -> float:
@@ -259,10 +251,9 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
                                       rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
     for name, column in zip(CLOSURE, np.column_stack([closing.velocity, np.degrees(closing.tilt[:, :2])]).T):
         scalars[name] = mean_se(column)
-    scalars["acc_gyro_lag"] = lag_scalar(np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate)
-                                                   for s0, s1 in strides]), rate)
+    curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
     return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
-                     _spectrum(acc_norm, strides, rate), result.stationary, float(gravity))
+                     _spectrum(acc_norm, strides, rate), curves, result.stationary, float(gravity))
 
 
 def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat: np.ndarray,
