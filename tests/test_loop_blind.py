@@ -47,10 +47,10 @@ SENSOR_CASES = [pytest.param(s, marks=BMI160_STANCE) if s == "bmi160" else s for
 @pytest.mark.parametrize("sensor", SENSOR_CASES)
 def test_untouched_recording_names_only_sensor_calibration_effects(sensor):
     """What the loop names on an untouched recording must be a sensor error the preset really has (its
-    accelerometer bias and scale read as a scale, its misalignment as a mount yaw): no gait or timing effect."""
+    accelerometer bias, scale and misalignment, its gyro scale and g-sensitivity): no gait or timing effect."""
     named = blind.named_effects(untouched(sensor))
-    allowed = {"accel_scale", "accel_scale_x", "accel_scale_y", "accel_scale_z", "mount_yaw", "gyro_scale_x",
-               "gyro_scale_y", "gyro_scale_z", "g_sensitivity"}
+    allowed = {"accel_scale", *(f"{kind}_{axis}" for kind in ("accel_scale", "accel_bias", "gyro_scale")
+                                for axis in "xyz"), "mount_yaw", "g_sensitivity"}
     assert set(named) <= allowed, named
 
 
@@ -79,7 +79,7 @@ def test_a_recordings_own_effects_moved_onto_its_default_twin_give_back_its_fitt
     result = untouched("paper-vn200")
     simulate = TwinSimulator()
     effects = transfer.accepted_effects(result)
-    assert effects, "the untouched recording names its accelerometer scale"
+    assert effects, "the untouched recording names its accelerometer bias"
     again = transfer.score(result, transfer.with_effects(result, effects, simulate), simulate)
     assert again["q_signature"] == pytest.approx(transfer.q_signature(result.residuals_after), rel=1e-9)
     default = transfer.score(result, result.twin_before, simulate)

@@ -47,6 +47,17 @@ def test_stance_creep_reads_as_stance_velocity():
     assert sig.scalars["stance_velocity"].value == pytest.approx(0.02, abs=0.001)
 
 
+@pytest.mark.parametrize("delay_ms", [-4.0, 4.0, 8.0])
+def test_a_gyro_delay_adds_itself_to_acc_gyro_lag(reference_pair, delay_ms):
+    """A pure delay of the gyro (its samples linearly interpolated at t - delay, numpy only) moves the lag of the
+    strides' mean |a| x |dw/dt| correlation peak by the delay: the lag is linear in it, at 200 Hz (5 ms
+    samples), to a millisecond."""
+    (rec, base), _ = reference_pair
+    gyr = np.stack([np.interp(rec.t - delay_ms / 1000.0, rec.t, g) for g in rec.gyr.T], axis=1)
+    delayed = signature(rec.t, rec.acc, gyr, rec.truth.t, rec.truth.pos)
+    assert residuals.compare(delayed, base)["acc_gyro_lag"].value == pytest.approx(delay_ms, abs=1.0)
+
+
 def test_mount_yaw_turns_the_swing_axis_by_the_same_angle(reference_pair):
     (_, base), _ = reference_pair
     _, turned = _walk(1, {"mounting_misalignment": [[0.0, 0.0, 6.0], "deg"]})

@@ -25,7 +25,9 @@
    with a grid of ``settings.GRID_POINTS`` values plus a bounded Brent refinement, re-simulating the twin each time
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
-5. the effect explaining the most is added to the twin when it explains at least ``settings.EXPLAINED_FRACTION``,
+5. the effect that leaves the smallest misfit (Q over all signature residuals) is added to the twin when it
+   lowers that misfit, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to
+   the noise level,
    lowers Q, and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
@@ -137,31 +139,49 @@ def compare(measured: Side, twin: Side, noise: dict) -> dict:
 
 def comparison_noise(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, progress: Progress) -> dict:
     """What a comparison with this twin is uncertain by beyond the stride-to-stride scatter (name -> value),
-    calibrated on the twin itself: it is simulated with ``settings.NAV_REPEATS`` other seeds and every pair of
-    those simulations is compared as recording and twin would be (same model, so only chance differs).
+    calibrated on the twin itself: it is simulated with ``settings.NAV_REPEATS`` other seeds; every pair of
+    those simulations is compared as recording and twin would be (same model, so only chance differs), and
+    each simulation gets a twin of its own, fitted by the recipe that fitted this one, and is compared with it
+    (a *twin of the twin*: what the fit itself gets wrong, on a recording whose model the fit can reach).
 
-    - **Signature residuals**: the floor is what the pairs' residuals show beyond their own stride scatter,
-      ``sqrt(max(0, mean(value^2 - se^2)))`` (``se`` the pair's combined standard error): the part of the
-      chance difference between two walks that the per-stride standard errors miss (e.g. a profile averaged
-      over few, unevenly cut strides). With it, a residual's z is ~1 between two simulations of one model.
-    - **Navigation**: the standard deviation of the twin's navigation metrics over those seeds, at least
-      ``settings.NAV_FLOOR``.
+    - **Signature residuals**: the floor is what those residuals show beyond their own stride scatter,
+      ``sqrt(max(0, mean(value^2 - se^2)))`` (``se`` the combined standard error), the larger of the pairs' and
+      the twins of the twin's: the part of the difference between a recording and its twin that the per-stride
+      standard errors miss (a profile averaged over few, unevenly cut strides; a swing peak the gait-shape fit
+      does not reach). With it, a residual's z is ~1 between a simulation and its own twin.
+    - **Navigation**: the standard deviation of the twin's navigation metrics over those seeds, the rms of the
+      twins of the twin's navigation discrepancies, and ``settings.NAV_FLOOR``, whichever is largest.
     """
-    progress.stage("calibrating the comparison noise on the twin", settings.NAV_REPEATS)
+    progress.stage("calibrating the comparison noise on the twin and twins of the twin", 2 * settings.NAV_REPEATS)
     sides = []
     for k in range(settings.NAV_REPEATS):
         sides.append(simulate_side(simulate, twin, measured, True, twin.seed + settings.TWIN_OF_TWIN_SEED + k))
         progress.step("simulations of the twin with other seeds")
-    excess = {}
-    for i in range(len(sides)):
-        for j in range(i + 1, len(sides)):
-            for name, r in residuals.compare(sides[i].signature, sides[j].signature).items():
+    pairs = [residuals.compare(sides[i].signature, sides[j].signature)
+             for i in range(len(sides)) for j in range(i + 1, len(sides))]
+    fitted, nav_gaps = [], {}
+    for side in sides:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            own = tw.fit_twin(side.recording, side.signature, side.solution, simulate)
+        again = simulate_side(simulate, own, side, True)
+        fitted.append(residuals.compare(side.signature, again.signature))
+        for key in measured.nav:
+            nav_gaps.setdefault(key, []).append(side.nav.get(key, math.nan) - again.nav.get(key, math.nan))
+        progress.step("twins of the twin fitted")
+    floors = {}
+    for group in (pairs, fitted):
+        excess = {}
+        for compared in group:
+            for name, r in compared.items():
                 if math.isfinite(r.value):
                     excess.setdefault(name, []).append(r.value ** 2 - r.uncertainty ** 2)
-    floors = {name: float(math.sqrt(max(0.0, np.mean(v)))) for name, v in excess.items()}
+        for name, v in excess.items():
+            floors[name] = max(floors.get(name, 0.0), float(math.sqrt(max(0.0, np.mean(v)))))
     for key in measured.nav:
         spread = np.nanstd([s.nav.get(key, math.nan) for s in sides], ddof=1)
-        floors[key] = float(max(np.nan_to_num(spread), settings.NAV_FLOOR[key]))
+        gap = np.sqrt(np.nanmean(np.square(nav_gaps[key]))) if np.isfinite(nav_gaps[key]).any() else 0.0
+        floors[key] = float(max(np.nan_to_num(spread), gap, settings.NAV_FLOOR[key]))
     return floors
 
 
@@ -182,10 +202,14 @@ class Fit:
     q_after: float
     fraction: float
     harmed: tuple = ()
+    total_before: float = math.nan
+    total_after: float = math.nan
+    acted_at_noise_level: bool = False
 
     def summary(self) -> dict:
         return {"effect": self.effect.name, "magnitude": self.magnitude, "unit": self.effect.unit,
                 "fraction_explained": self.fraction, "q_before": self.q_before, "q_after": self.q_after,
+                "misfit_before": self.total_before, "misfit_after": self.total_after,
                 "made_worse": list(self.harmed), "identifiable": self.identifiable}
 
     @property
@@ -196,8 +220,8 @@ class Fit:
 
     @property
     def acceptable(self) -> bool:
-        return (self.identifiable and self.fraction >= settings.EXPLAINED_FRACTION and self.q_after < self.q_before
-                and not self.harmed)
+        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.acted_at_noise_level)
+                and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed)
 
 
 def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
@@ -266,7 +290,10 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
     fraction = 1.0 - after / before if before > 0 else 0.0
     harmed = tuple(n for n in res if n != acted and n in base
                    and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
-    return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed)
+    signature_names = [n for n in base if not n.startswith("nav_") and n not in settings.DERIVED]
+    return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed,
+                               acted_at_noise_level=bool(acted in res and res[acted].at_noise_level),
+                               total_before=_q(base, signature_names), total_after=_q(res, signature_names))
 
 
 def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:
@@ -366,7 +393,7 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
                                             lambda scenario, sig: fx.context(rec, scenario, measured.signature, sig))
             fits.append(judged(fitted[e.name], current, acted.name))
             progress.step(f"effects fitted ({e.name})")
-        ranked_fits = sorted(fits, key=lambda f: (f.acceptable, f.fraction, -f.q_after), reverse=True)
+        ranked_fits = sorted(fits, key=lambda f: (f.acceptable, -f.total_after), reverse=True)
         best = ranked_fits[0] if ranked_fits else None
         accepted = best is not None and best.acceptable
         attributions.append(_record(acted, best, accepted, fits))

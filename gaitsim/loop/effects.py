@@ -19,10 +19,11 @@ re-run the sensor model on the cached walk).
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
 | accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
+| accel_bias_x, _y, _z | [sensor] accel_bias, one component + b (mount tilt kept on the rest reading) | m/s^2 | stride closure, rest_acc_norm, acc profiles, navigation |
 | g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
 
-The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, time and
+The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, bias, time and
 g-sensitivity errors apart: each turns gravity or the specific force its own way while the foot pitches. The
 ``rest_gyro_change`` and ``rest_acc_change`` residuals (a sensor drift between the first and the last rest) are
 moved by no effect: a drifting bias is outside the library and is reported unexplained.
@@ -40,6 +41,7 @@ from typing import Callable
 import numpy as np
 
 from nav import quaternion as quat
+from nav.alignment import tilt_from_specific_force
 from nav.recording import Recording
 
 from ..scenario import Scenario, section_table
@@ -136,6 +138,33 @@ def _scale_guess(res, ctx):
     return None if m is None else 100.0 * (m / w - 1.0)
 
 
+def _bias_guess(axis: int):
+    """Closed-form first guess of an accelerometer bias on ``axis`` from the rest norm: the norm residual over
+    that axis's share of the rest specific force (None where the axis is near horizontal at rest: the norm
+    cannot see it there)."""
+    def guess(res, ctx):
+        value = _value(res, "rest_acc_norm")
+        rest = np.asarray(ctx["rest_specific_force"], float)
+        share = rest[axis] / max(float(np.linalg.norm(rest)), 1e-9)
+        return None if value is None or abs(share) < 0.5 else value / share
+    return guess
+
+
+def _bias_changes(axis: int, mps2: float, ctx: dict) -> dict:
+    """The twin's accelerometer bias with ``mps2`` (m/s^2) added on ``axis``, and its mount roll and pitch
+    turned by what that bias changes in the tilt read from the rest specific force: the twin's tilt was read
+    from the recording at rest, where the bias acts too, so the twin's rest reading must stay the recording's
+    (a bias on a horizontal axis is otherwise a mount pitch or roll at rest; the stride closure tells them
+    apart)."""
+    bias = np.array(ctx["accel_bias"], float)
+    rest = np.asarray(ctx["rest_specific_force"], float)
+    old = np.array(tilt_from_specific_force(rest - bias))
+    bias[axis] += mps2
+    roll, pitch = np.asarray(ctx["mount_roll_pitch_rad"]) + np.array(tilt_from_specific_force(rest - bias)) - old
+    return _sensor(accel_bias=[bias.tolist(), "m/s^2"],
+                   mounting_misalignment=[[float(roll), float(pitch), ctx["mount_yaw_rad"]], "rad"])
+
+
 def _sensor(**items) -> dict:
     return {"sensor": items}
 
@@ -203,6 +232,10 @@ LIBRARY: tuple[Effect, ...] = (
              lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}))
       for sensor, label, profiles, extra in (("gyro", "gyro", GYR_PROFILES, ()),
                                              ("accel", "accelerometer", ACC_PROFILES, ("rest_acc_norm",)))
+      for i, axis in enumerate("xyz")),
+    *(Effect(f"accel_bias_{axis}", f"accelerometer bias of the sensor's {axis} axis",
+             f"[sensor] accel_bias[{i}]", "m/s^2", CLOSURE + ACC_PROFILES + NAV + ("rest_acc_norm",), (-1.5, 1.5),
+             lambda m, ctx, i=i: _bias_changes(i, m, ctx), _bias_guess(i))
       for i, axis in enumerate("xyz")),
     Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's; the "
            "twin's gyro bias, found at rest where the g-sensitivity acts too, loses k times the rest specific force)",
@@ -272,12 +305,15 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
             "creep_mps": float(micro["creep_velocity_mps"][0]),
             "stance_roll_rate_dps": float(micro["stance_roll_rate_dps"]),
             "mount_roll_pitch_rad": [float(roll), float(pitch)],
+            "mount_yaw_rad": float(yaw),
             **{key: (np.asarray(twin.sensor[key]) if twin.sensor is not None else np.eye(3)).tolist()
                for key in ("gyro_misalignment", "accel_misalignment")},
             "gyro_g_sensitivity": np.degrees(np.asarray(twin.sensor["gyro_g_sensitivity"])
                                              if twin.sensor is not None else np.zeros((3, 3))).tolist(),
             "gyro_bias_rad_s": (np.asarray(twin.sensor["gyro_bias"]) if twin.sensor is not None
                                 else np.zeros(3)).tolist(),
+            "accel_bias": (np.asarray(twin.sensor["accel_bias"]) if twin.sensor is not None
+                           else np.zeros(3)).tolist(),
             "rest_specific_force": rec.acc[measured.stationary].mean(0).tolist()}
 
 

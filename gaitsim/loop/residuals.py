@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import settings
-from .signature import CHANNELS, Signature, curve_shift_ms, mean_se
+from .signature import CHANNELS, Signature, curve_shift_ms
 
 UNITS = {
     "stance_gyro": "deg/s", **{f"stance_rate_{a}": "deg/s" for a in "xyz"}, "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
@@ -77,13 +77,10 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         if w is None or not (math.isfinite(m.value) and math.isfinite(w.value)):
             continue
         out[name] = Residual(name, UNITS[name], m.value, w.value, m.value - w.value, uncertainty(name, m.se, w.se))
-    if measured.lag_curves.shape[1:] == twin.lag_curves.shape[1:]:
-        template = np.nanmean(twin.lag_curves, axis=0)
-        m = mean_se(curve_shift_ms(measured.lag_curves, template, measured.rate_hz))
-        w = mean_se(curve_shift_ms(twin.lag_curves, template, twin.rate_hz))
-        if math.isfinite(m.value) and math.isfinite(w.value):
-            out["acc_gyro_lag"] = Residual("acc_gyro_lag", UNITS["acc_gyro_lag"], m.value, w.value,
-                                           m.value - w.value, uncertainty("acc_gyro_lag", m.se, w.se))
+    lag = _lag(measured, twin)
+    if lag is not None:
+        out["acc_gyro_lag"] = Residual("acc_gyro_lag", UNITS["acc_gyro_lag"], lag[0], 0.0, lag[0],
+                                       uncertainty("acc_gyro_lag", lag[1]))
     for c in CHANNELS:
         m, w = measured.profiles[c], twin.profiles[c]
         name = f"profile_{c}"
@@ -91,6 +88,26 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         out[name] = Residual(name, UNITS[name], float(np.sqrt(np.mean(m.mean**2))), float(np.sqrt(np.mean(w.mean**2))),
                              rms, uncertainty(name, float(np.sqrt(np.mean(m.se**2 + w.se**2)))))
     return out
+
+
+def _lag(measured: Signature, twin: Signature) -> tuple[float, float] | None:
+    """``acc_gyro_lag`` (ms): the shift of the measured strides' mean correlation curve against the twin's,
+    and its standard error, jackknifed over the strides of both sides (None without comparable curves)."""
+    m = measured.lag_curves[np.all(np.isfinite(measured.lag_curves), axis=1)]
+    w = twin.lag_curves[np.all(np.isfinite(twin.lag_curves), axis=1)]
+    if m.shape[1:] != w.shape[1:] or len(m) < 2 or len(w) < 2:
+        return None
+    value = curve_shift_ms(m.mean(0), w.mean(0), measured.rate_hz)
+    if not math.isfinite(value):
+        return None
+    variance = 0.0
+    for own, other, moving in ((m, w.mean(0), True), (w, m.mean(0), False)):
+        n = len(own)
+        left_out = [(own.sum(0) - c) / (n - 1) for c in own]
+        shifts = np.array([curve_shift_ms(c, other, measured.rate_hz) if moving else
+                           curve_shift_ms(other, c, measured.rate_hz) for c in left_out])
+        variance += (n - 1) / n * float(np.sum((shifts - shifts.mean()) ** 2))
+    return value, math.sqrt(variance)
 
 
 def profile_fit(measured: Signature, twin: Signature, factor: float = settings.PROFILE_SPREAD_FACTOR) -> dict:

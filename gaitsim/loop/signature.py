@@ -22,10 +22,12 @@ simulated, so two signatures can be compared number by number:
                                          the Nyquist frequency exceeds HF_NYQUIST_MARGIN times the edge)
    onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
                                          ONSET_WINDOW_S of the stance (impact ringing lives here)
-   acc_gyro_lag                ms        shift of the stride's cross-correlation curve of |a| with |dw/dt|
-                                         (band-passed, +-LAG_WINDOW_S) against the twin's mean curve; set by
-                                         residuals.compare (the twin's strides against their own mean give
-                                         its spread), so a pure relative delay of the gyro shows as its value
+   acc_gyro_lag                ms        shift of the strides' mean cross-correlation curve of band-passed
+                                         |a| with |dw/dt| (+-LAG_WINDOW_S) against the twin's mean curve (>0:
+                                         the gyro's features come later); set by residuals.compare, with a
+                                         jackknife over the strides of both for its uncertainty (a single
+                                         stride's curve has several lobes of similar height), so a pure
+                                         relative delay of the gyro shows as its value
    swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
                                          momentum direction of the gyro, sign so that y > 0)
    stance_velocity             m/s       forward velocity of the position track (reference or truth) over
@@ -141,34 +143,34 @@ def _band_pass(x: np.ndarray, rate_hz: float, band: tuple = settings.LAG_BAND_HZ
 
 
 def _xcorr_curve(gyr: np.ndarray, acc_norm: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Normalised cross-correlation of band-passed |a| with band-passed |dw/dt| at lags -L..L samples."""
+    """Normalised cross-correlation of band-passed |a| with band-passed |dw/dt| at lags -L..L samples in steps
+    of 1 / ``settings.LAG_UPSAMPLE`` sample: the inverse transform of their cross-spectrum, zero-padded (both
+    are band-limited, so the curve between samples is their correlation at a fractional lag, not an
+    interpolation)."""
     a = _band_pass(acc_norm, rate_hz)
     g = _band_pass(np.linalg.norm(np.gradient(gyr, axis=0), axis=1) * rate_hz, rate_hz)
     max_lag = max(2, int(round(settings.LAG_WINDOW_S * rate_hz)))
+    up = settings.LAG_UPSAMPLE
     n = len(a)
     if n <= 2 * max_lag + 4:
-        return np.full(2 * max_lag + 1, math.nan)
-    corr = np.array([np.dot(a[max_lag:n - max_lag], g[max_lag + k:n - max_lag + k])
-                     for k in range(-max_lag, max_lag + 1)])
+        return np.full(2 * max_lag * up + 1, math.nan)
+    corr = np.fft.irfft(np.conj(np.fft.rfft(a)) * np.fft.rfft(g), n * up) * up
+    corr = np.concatenate([corr[-max_lag * up:], corr[:max_lag * up + 1]])
     scale = np.linalg.norm(a) * np.linalg.norm(g)
     return corr / scale if scale > 0 else corr
 
 
-def curve_shift_ms(curves: np.ndarray, template: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Shift (ms) of each curve (n, L) against ``template`` (L,) by least squares on an upsampled grid;
-    positive: the gyro feature comes later relative to the accelerometer feature than in the template."""
-    lags = np.arange(len(template)) - len(template) // 2
-    fine = np.linspace(lags[0], lags[-1], (len(lags) - 1) * settings.LAG_UPSAMPLE + 1)
-    inner = np.abs(fine) <= lags[-1] / 2
-    shifts = fine[inner]
-    tmpl = np.interp(fine, lags, template)
-    shifted = np.interp((fine[inner][None, :] - shifts[:, None]).ravel(), fine, tmpl).reshape(len(shifts), -1)
-    out = np.full(len(curves), math.nan)
-    for k, c in enumerate(curves):
-        if np.all(np.isfinite(c)):
-            cost = np.sum((np.interp(fine, lags, c)[inner][None, :] - shifted) ** 2, axis=1)
-            out[k] = shifts[int(np.argmin(cost))]
-    return 1000.0 * out / rate_hz
+def curve_shift_ms(curve: np.ndarray, template: np.ndarray, rate_hz: float) -> float:
+    """Shift (ms) of a cross-correlation curve of :func:`_xcorr_curve` against ``template`` by least squares
+    over the inner half of the lag window (shifts up to half the window); positive: the gyro's features come
+    later relative to the accelerometer's than in the template. NaN for a curve with NaN."""
+    if not (np.all(np.isfinite(curve)) and np.all(np.isfinite(template))):
+        return math.nan
+    half = len(template) // 2
+    shifts = np.arange(-(half // 2), half // 2 + 1)
+    inner = slice(half - half // 2, half + half // 2 + 1)
+    cost = [np.sum((curve[inner] - template[inner.start - k:inner.stop - k]) ** 2) for k in shifts]
+    return 1000.0 * float(shifts[int(np.argmin(cost))]) / (settings.LAG_UPSAMPLE * rate_hz)
 
 
 def _swing_axis_yaw(gyr: np.ndarray) -> float:
