@@ -85,3 +85,13 @@ def test_a_recordings_own_effects_moved_onto_its_default_twin_give_back_its_fitt
     default = transfer.score(result, result.twin_before, simulate)
     assert default["q_signature"] == pytest.approx(transfer.q_signature(result.residuals_before), rel=1e-9)
     assert again["q_signature"] < default["q_signature"]
+
+
+def test_a_transferred_twin_that_shows_no_strides_scores_an_infinite_misfit():
+    """A held-out row never stops the command: an effect moved onto a twin where it smooths the strides away
+    (a 1 Hz low-pass) gives an infinite misfit and the reason, not an exception."""
+    result = untouched("paper-vn200")
+    simulate = TwinSimulator()
+    smoothed = transfer.with_effects(result, [("bandwidth_first_order", 1.0)], simulate)
+    scored = transfer.score(result, smoothed, simulate)
+    assert scored["q_signature"] == float("inf") and "strides" in scored["failed"]

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 
+from nav.recording import RecordingError
+
 from . import attribution as att
 from . import effects as fx
 from . import settings
@@ -45,7 +47,13 @@ def accepted_effects(result: att.LoopResult) -> list[tuple[str, float]]:
 
 
 def score(target: att.LoopResult, twin: tw.Twin, simulate: tw.TwinSimulator) -> dict:
-    side = att.simulate_side(simulate, twin, target.measured, True)
+    """``q_signature`` and ``nav_discrepancy`` of ``twin`` against the target recording; a twin whose
+    simulation shows no regular strides (an effect moved onto a recording it does not fit, e.g. a low-pass that
+    smooths the strides away) scores an infinite misfit, with the reason."""
+    try:
+        side = att.simulate_side(simulate, twin, target.measured, True)
+    except (ValueError, RecordingError) as exc:
+        return {"q_signature": math.inf, "nav_discrepancy": {}, "failed": str(exc)}
     res = att.compare(target.measured, side, target.noise)
     return {"q_signature": q_signature(res), "nav_discrepancy": nav_discrepancy(res)}
 
