@@ -92,6 +92,5 @@ def test_a_transferred_twin_that_shows_no_strides_scores_an_infinite_misfit():
     (a 1 Hz low-pass) gives an infinite misfit and the reason, not an exception."""
     result = untouched("paper-vn200")
     simulate = TwinSimulator()
-    smoothed = transfer.with_effects(result, [("bandwidth_first_order", 1.0)], simulate)
-    scored = transfer.score(result, smoothed, simulate)
+    scored = transfer.transferred_score(result, [("bandwidth_first_order", 1.0), ("mount_yaw", 2.0)], simulate)
     assert scored["q_signature"] == float("inf") and "strides" in scored["failed"]

@@ -47,15 +47,20 @@ def accepted_effects(result: att.LoopResult) -> list[tuple[str, float]]:
 
 
 def score(target: att.LoopResult, twin: tw.Twin, simulate: tw.TwinSimulator) -> dict:
-    """``q_signature`` and ``nav_discrepancy`` of ``twin`` against the target recording; a twin whose
-    simulation shows no regular strides (an effect moved onto a recording it does not fit, e.g. a low-pass that
-    smooths the strides away) scores an infinite misfit, with the reason."""
-    try:
-        side = att.simulate_side(simulate, twin, target.measured, True)
-    except (ValueError, RecordingError) as exc:
-        return {"q_signature": math.inf, "nav_discrepancy": {}, "failed": str(exc)}
+    """``q_signature`` and ``nav_discrepancy`` of ``twin`` against the target recording."""
+    side = att.simulate_side(simulate, twin, target.measured, True)
     res = att.compare(target.measured, side, target.noise)
     return {"q_signature": q_signature(res), "nav_discrepancy": nav_discrepancy(res)}
+
+
+def transferred_score(target: att.LoopResult, effects: list[tuple[str, float]], simulate: tw.TwinSimulator) -> dict:
+    """:func:`score` of the target's default twin with ``effects`` added (:func:`with_effects`); a twin whose
+    simulation shows no regular strides on the way (an effect moved onto a recording it does not fit, e.g. a
+    low-pass that smooths the strides away) scores an infinite misfit, with the reason."""
+    try:
+        return score(target, with_effects(target, effects, simulate), simulate)
+    except (ValueError, RecordingError) as exc:
+        return {"q_signature": math.inf, "nav_discrepancy": {}, "failed": str(exc)}
 
 
 def with_effects(target: att.LoopResult, effects: list[tuple[str, float]],
@@ -80,11 +85,11 @@ def predict(source_label: str, source: att.LoopResult, target_label: str, target
     if not effects:
         row.update(transferred=default, better=False, per_effect={})
         return row
-    row["transferred"] = score(target, with_effects(target, effects, simulate), simulate)
+    row["transferred"] = transferred_score(target, effects, simulate)
     row["better"] = row["transferred"]["q_signature"] < default["q_signature"]
     row["per_effect"] = {}
     for name, magnitude in effects:
-        alone = score(target, with_effects(target, [(name, magnitude)], simulate), simulate)
+        alone = transferred_score(target, [(name, magnitude)], simulate)
         row["per_effect"][name] = {"magnitude": magnitude, "unit": fx.BY_NAME[name].unit,
                                    "q_signature": alone["q_signature"],
                                    "transfers": alone["q_signature"] < default["q_signature"]}
