@@ -40,7 +40,7 @@ BMI160_STANCE = pytest.mark.xfail(strict=True, reason=(
     "accelerometer offset reads as a 4.3 deg mount pitch in the twin's fit from gravity, which projects the "
     "foot's 4.5 deg/s pronation roll onto z (0.33 deg/s); with that offset removed no stance effect is named. "
     "A mount pitch leaves the foot's pitch axis on the sensor's y, so the gyro cannot separate it from the "
-    "offset. The ramp case then names an isotropic accel_scale beyond the untouched per-axis ones."))
+    "offset. The ramp case then names an isotropic accel_scale and an x bias beyond the untouched per-axis scales."))
 SENSOR_CASES = [pytest.param(s, marks=BMI160_STANCE) if s == "bmi160" else s for s in blind.SENSORS]
 
 

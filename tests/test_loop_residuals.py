@@ -1,5 +1,7 @@
 """Residual metrics of the loop: zero against oneself, noise level between seeds, and the laws of single terms."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -108,3 +110,14 @@ def test_scale_effects_compose_on_the_twins_matrix_instead_of_replacing_it():
     equal = np.array(fx.BY_NAME["accel_scale"].changes(-1.0, {"accel_misalignment": axis.tolist()})["sensor"][
         "accel_misalignment"][0])
     np.testing.assert_allclose(equal, axis * 0.99)
+
+
+def test_an_effect_fitted_on_the_edge_of_its_search_range_is_not_named():
+    """A magnitude on the edge of the searched range did not bracket a minimum: the fit is no estimate, and the
+    loop does not name it however much it lowers the misfit (x-io's short walk once named an 8 Hz bandwidth,
+    the lower edge)."""
+    from gaitsim.loop.attribution import Fit
+    fit = Fit(fx.BY_NAME["bandwidth"], 8.0, {}, {}, None, q_before=50.0, q_after=5.0, fraction=0.9,
+              total_before=80.0, total_after=20.0)
+    assert fit.acceptable
+    assert not dataclasses.replace(fit, at_bound=True).acceptable

@@ -28,7 +28,8 @@
 5. the effect that leaves the smallest misfit (Q over all signature residuals) is added to the twin when it
    lowers that misfit, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to
    the noise level,
-   lowers Q, and does no harm: no other residual, navigation included, that was at the noise level may end
+   lowers Q, lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
+   bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
    at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
@@ -205,12 +206,13 @@ class Fit:
     total_before: float = math.nan
     total_after: float = math.nan
     acted_at_noise_level: bool = False
+    at_bound: bool = False
 
     def summary(self) -> dict:
         return {"effect": self.effect.name, "magnitude": self.magnitude, "unit": self.effect.unit,
                 "fraction_explained": self.fraction, "q_before": self.q_before, "q_after": self.q_after,
                 "misfit_before": self.total_before, "misfit_after": self.total_after,
-                "made_worse": list(self.harmed), "identifiable": self.identifiable}
+                "made_worse": list(self.harmed), "at_search_bound": self.at_bound, "identifiable": self.identifiable}
 
     @property
     def identifiable(self) -> bool:
@@ -221,7 +223,8 @@ class Fit:
     @property
     def acceptable(self) -> bool:
         return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.acted_at_noise_level)
-                and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed)
+                and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed
+                and not self.at_bound)
 
 
 def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
@@ -278,7 +281,9 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
     magnitude = float(from_axis(best))
     q_after, res, side = evaluate(magnitude, True)  # navigated, so that no harm to navigation goes unseen
     changes = effect.changes(magnitude, ctx)
-    return Fit(effect, magnitude, changes, res, side, _q(base, names), q_after, 0.0)
+    edge = settings.BRENT_TOLERANCE * (axis[-1] - axis[0])
+    return Fit(effect, magnitude, changes, res, side, _q(base, names), q_after, 0.0,
+               at_bound=bool(best <= axis[0] + edge or best >= axis[-1] - edge))
 
 
 def judged(fit: Fit, base: dict, acted: str) -> Fit:
