@@ -54,9 +54,11 @@ def test_bias_instability_recovered_as_allan_floor_over_0_664():
 
 
 def test_gauss_markov_peak_constants():
+    """The peak of the Gauss-Markov Allan curve, found by maximising it, is the constant the simulator uses."""
     tau_ratio, sigma_ratio = allan.gauss_markov_peak()
     assert tau_ratio == pytest.approx(1.8927, abs=1e-3)
     assert sigma_ratio == pytest.approx(0.61736, abs=1e-4)
+    assert (tau_ratio, sigma_ratio) == pytest.approx(allan.GAUSS_MARKOV_PEAK, rel=1e-9)
 
 
 def test_overlapping_allan_matches_white_noise_law_at_every_tau():

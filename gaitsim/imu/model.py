@@ -51,7 +51,7 @@ import numpy as np
 from numba import njit
 
 from gaitsim.errors import ScenarioError
-from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, gauss_markov_peak
+from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
 from gaitsim.imu.units import si_unit
 from nav import quaternion
 from nav.calibration import Calibration
@@ -203,7 +203,7 @@ class _ReadOnlyDict(dict):
 @lru_cache(maxsize=1)
 def _gauss_markov_std_per_instability() -> float:
     """Stationary GM std per unit of datasheet bias instability B: 0.664 / 0.6174."""
-    return BIAS_INSTABILITY_FLOOR / gauss_markov_peak()[1]
+    return BIAS_INSTABILITY_FLOOR / GAUSS_MARKOV_PEAK[1]
 
 
 # ---------------------------------------------------------------------------------------------- pieces
