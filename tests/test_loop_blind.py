@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from gaitsim.loop import blind, transfer
+from gaitsim.loop import blind, residuals, transfer
 from gaitsim.loop.twin import TwinSimulator
 
 _UNTOUCHED = {}
@@ -81,9 +81,9 @@ def test_a_recordings_own_effects_moved_onto_its_default_twin_give_back_its_fitt
     effects = transfer.accepted_effects(result)
     assert effects, "the untouched recording names its accelerometer bias"
     again = transfer.score(result, transfer.with_effects(result, effects, simulate), simulate)
-    assert again["q_signature"] == pytest.approx(transfer.q_signature(result.residuals_after), rel=1e-9)
+    assert again["q_signature"] == pytest.approx(residuals.signature_misfit(result.residuals_after), rel=1e-9)
     default = transfer.score(result, result.twin_before, simulate)
-    assert default["q_signature"] == pytest.approx(transfer.q_signature(result.residuals_before), rel=1e-9)
+    assert default["q_signature"] == pytest.approx(residuals.signature_misfit(result.residuals_before), rel=1e-9)
     assert again["q_signature"] < default["q_signature"]
 
 

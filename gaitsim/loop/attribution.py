@@ -25,10 +25,10 @@
    with a grid of ``settings.GRID_POINTS`` values plus a bounded Brent refinement, re-simulating the twin each time
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
    The fraction of the acted residual an effect explains is ``1 - |value after| / |value before|``;
-5. the effect that leaves the smallest misfit (Q over all signature residuals) is added to the twin when it
-   lowers that misfit, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to
-   the noise level,
-   lowers Q, lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
+5. of the candidates, the one that leaves the smallest misfit over all signature residuals
+   (:func:`gaitsim.loop.residuals.signature_misfit`) is added to the twin when it lowers that misfit and its
+   own Q, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to the noise
+   level, lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
    bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
@@ -295,10 +295,10 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
     fraction = 1.0 - after / before if before > 0 else 0.0
     harmed = tuple(n for n in res if n != acted and n in base
                    and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
-    signature_names = [n for n in base if not n.startswith("nav_") and n not in settings.DERIVED]
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed,
                                acted_at_noise_level=bool(acted in res and res[acted].at_noise_level),
-                               total_before=_q(base, signature_names), total_after=_q(res, signature_names))
+                               total_before=residuals.signature_misfit(base),
+                               total_after=residuals.signature_misfit(res))
 
 
 def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:

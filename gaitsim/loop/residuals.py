@@ -78,7 +78,7 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
             continue
         out[name] = Residual(name, UNITS[name], m.value, w.value, m.value - w.value, uncertainty(name, m.se, w.se))
     lag = _lag(measured, twin)
-    if lag is not None:
+    if lag is not None:  # the twin's mean curve is the template: its own shift is 0
         out["acc_gyro_lag"] = Residual("acc_gyro_lag", UNITS["acc_gyro_lag"], lag[0], 0.0, lag[0],
                                        uncertainty("acc_gyro_lag", lag[1]))
     for c in CHANNELS:
@@ -88,6 +88,13 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         out[name] = Residual(name, UNITS[name], float(np.sqrt(np.mean(m.mean**2))), float(np.sqrt(np.mean(w.mean**2))),
                              rms, uncertainty(name, float(np.sqrt(np.mean(m.se**2 + w.se**2)))))
     return out
+
+
+def signature_misfit(res: dict) -> float:
+    """Sum of z^2 over the signature residuals of ``res`` (name -> :class:`Residual`) with a finite z:
+    navigation and ``settings.DERIVED`` left out. The misfit the loop minimises and the held-out check scores."""
+    return float(sum(r.z ** 2 for name, r in res.items()
+                     if not name.startswith("nav_") and name not in settings.DERIVED and math.isfinite(r.z)))
 
 
 def _lag(measured: Signature, twin: Signature) -> tuple[float, float] | None:

@@ -167,10 +167,12 @@ def curve_shift_ms(curve: np.ndarray, template: np.ndarray, rate_hz: float) -> f
     if not (np.all(np.isfinite(curve)) and np.all(np.isfinite(template))):
         return math.nan
     half = len(template) // 2
-    shifts = np.arange(-(half // 2), half // 2 + 1)
-    inner = slice(half - half // 2, half + half // 2 + 1)
-    cost = [np.sum((curve[inner] - template[inner.start - k:inner.stop - k]) ** 2) for k in shifts]
-    return 1000.0 * float(shifts[int(np.argmin(cost))]) / (settings.LAG_UPSAMPLE * rate_hz)
+    quarter = half // 2
+    inner = curve[half - quarter:half + quarter + 1]
+    # the template shifted by k = -quarter .. quarter is template[half - quarter - k:][:len(inner)]
+    windows = np.lib.stride_tricks.sliding_window_view(template, len(inner))[half - 2 * quarter:half + 1][::-1]
+    shift = int(np.argmin(np.sum((windows - inner) ** 2, axis=1))) - quarter
+    return 1000.0 * float(shift) / (settings.LAG_UPSAMPLE * rate_hz)
 
 
 def _swing_axis_yaw(gyr: np.ndarray) -> float:

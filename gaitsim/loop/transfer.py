@@ -9,7 +9,7 @@ direction of a stance rotation (a left and a right foot rotate mirrored), so onl
 Both twins are scored against the target recording with the target's comparison noise
 (:func:`gaitsim.loop.attribution.comparison_noise`):
 
-- ``q_signature``: sum of z^2 over the signature residuals (navigation and ``settings.DERIVED`` left out), the
+- ``q_signature``: sum of z^2 over the signature residuals (:func:`gaitsim.loop.residuals.signature_misfit`), the
   misfit the loop minimises;
 - ``nav_discrepancy``: ``|twin - recording|`` of each navigation metric the target's reference allows.
 
@@ -26,14 +26,8 @@ from nav.recording import RecordingError
 
 from . import attribution as att
 from . import effects as fx
-from . import settings
+from . import residuals
 from . import twin as tw
-
-
-def q_signature(res: dict) -> float:
-    """Sum of z^2 over the signature residuals of ``res`` (name -> Residual) with a finite z."""
-    return float(sum(r.z ** 2 for name, r in res.items()
-                     if not name.startswith("nav_") and name not in settings.DERIVED and math.isfinite(r.z)))
 
 
 def nav_discrepancy(res: dict) -> dict:
@@ -50,7 +44,7 @@ def score(target: att.LoopResult, twin: tw.Twin, simulate: tw.TwinSimulator) -> 
     """``q_signature`` and ``nav_discrepancy`` of ``twin`` against the target recording."""
     side = att.simulate_side(simulate, twin, target.measured, True)
     res = att.compare(target.measured, side, target.noise)
-    return {"q_signature": q_signature(res), "nav_discrepancy": nav_discrepancy(res)}
+    return {"q_signature": residuals.signature_misfit(res), "nav_discrepancy": nav_discrepancy(res)}
 
 
 def transferred_score(target: att.LoopResult, effects: list[tuple[str, float]], simulate: tw.TwinSimulator) -> dict:
