@@ -1,4 +1,5 @@
-"""results/loop is reproducible: the loop run again on x-io short_walk gives the committed attribution."""
+"""results/loop is reproducible: the loop run again on x-io short_walk gives the committed attribution, also with
+its simulations on two worker processes (the committed one ran on one)."""
 
 import json
 import warnings
@@ -19,7 +20,7 @@ def test_short_walk_attribution_matches_the_committed_one():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the loader's data-quality counts are in meta
         rec = {r.meta["recording"]: r for r in load_dataset("xio-ngimu", DATA)}["short_walk"]
-    result = attribution.run_loop(rec)
+    result = attribution.run_loop(rec, workers=2)
     assert [(a["residual"], a["effect"]) for a in result.attributions] == [
         (a["residual"], a["effect"]) for a in committed["attributions"]]
     for now, then in zip(result.attributions, committed["attributions"]):

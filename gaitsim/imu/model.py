@@ -155,6 +155,11 @@ class SensorSpec:
     def __getitem__(self, name: str) -> np.ndarray:
         return self.parameters[name]
 
+    def __reduce__(self):
+        """Pickled (e.g. for a worker process) as its constructor's arguments, so it comes back validated and
+        read-only."""
+        return SensorSpec, (self.name, self.source, dict(self.parameters), self.filter_order, self.withheld)
+
     def replace(self, **changes) -> "SensorSpec":
         """A new spec with some parameters (SI) or the fields name/source/filter_order/withheld changed;
         this spec is left as it is."""

@@ -45,6 +45,8 @@ reported for the twin before any effect and after all accepted ones.
 
 from __future__ import annotations
 
+import concurrent.futures
+import contextlib
 import dataclasses
 import math
 import warnings
@@ -138,7 +140,19 @@ def compare(measured: Side, twin: Side, noise: dict) -> dict:
     return out
 
 
-def comparison_noise(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, progress: Progress) -> dict:
+def _twin_of_twin(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, seed: int) -> tuple[Side, dict, dict]:
+    """One seed of :func:`comparison_noise`: the twin simulated with ``seed`` and measured like the recording, its
+    own twin's residuals against it, and the navigation discrepancies between the two (metric -> value)."""
+    side = simulate_side(simulate, twin, measured, True, seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        own = tw.fit_twin(side.recording, side.signature, side.solution, simulate)
+    again = simulate_side(simulate, own, side, True)
+    gaps = {key: side.nav.get(key, math.nan) - again.nav.get(key, math.nan) for key in measured.nav}
+    return side, residuals.compare(side.signature, again.signature), gaps
+
+
+def comparison_noise(workers: "Workers", twin: tw.Twin, measured: Side, progress: Progress) -> dict:
     """What a comparison with this twin is uncertain by beyond the stride-to-stride scatter (name -> value),
     calibrated on the twin itself: it is simulated with ``settings.NAV_REPEATS`` other seeds; every pair of
     those simulations is compared as recording and twin would be (same model, so only chance differs), and
@@ -152,24 +166,20 @@ def comparison_noise(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, 
       does not reach). With it, a residual's z is ~1 between a simulation and its own twin.
     - **Navigation**: the standard deviation of the twin's navigation metrics over those seeds, the rms of the
       twins of the twin's navigation discrepancies, and ``settings.NAV_FLOOR``, whichever is largest.
+
+    The seeds are independent tasks of ``workers`` (:class:`Workers`).
     """
-    progress.stage("calibrating the comparison noise on the twin and twins of the twin", 2 * settings.NAV_REPEATS)
-    sides = []
-    for k in range(settings.NAV_REPEATS):
-        sides.append(simulate_side(simulate, twin, measured, True, twin.seed + settings.TWIN_OF_TWIN_SEED + k))
-        progress.step("simulations of the twin with other seeds")
+    progress.stage("calibrating the comparison noise on the twin and twins of the twin", settings.NAV_REPEATS)
+    seeds = [twin.seed + settings.TWIN_OF_TWIN_SEED + k for k in range(settings.NAV_REPEATS)]
+    sides, fitted, nav_gaps = [], [], {}
+    for side, own_residuals, gaps in workers.map(_twin_of_twin, [twin] * len(seeds), [measured] * len(seeds), seeds):
+        sides.append(side)
+        fitted.append(own_residuals)
+        for key, gap in gaps.items():
+            nav_gaps.setdefault(key, []).append(gap)
+        progress.step("simulations of the twin with other seeds, each with a twin of its own fitted")
     pairs = [residuals.compare(sides[i].signature, sides[j].signature)
              for i in range(len(sides)) for j in range(i + 1, len(sides))]
-    fitted, nav_gaps = [], {}
-    for side in sides:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            own = tw.fit_twin(side.recording, side.signature, side.solution, simulate)
-        again = simulate_side(simulate, own, side, True)
-        fitted.append(residuals.compare(side.signature, again.signature))
-        for key in measured.nav:
-            nav_gaps.setdefault(key, []).append(side.nav.get(key, math.nan) - again.nav.get(key, math.nan))
-        progress.step("twins of the twin fitted")
     floors = {}
     for group in (pairs, fitted):
         excess = {}
@@ -227,16 +237,18 @@ class Fit:
                 and not self.at_bound)
 
 
-def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
-               acted: str, ctx: dict, noise: dict, context_of=None) -> Fit:
-    """Fit ``effect``'s magnitude (module docstring, step 4) and measure what it explains of ``acted`` (one of
-    the residuals it moves: the fit itself does not depend on which).
+def fit_effect(simulate: tw.TwinSimulator, name: str, twin: tw.Twin, measured: Side, base: dict, acted: str,
+               ctx: dict, noise: dict) -> Fit:
+    """Fit the magnitude of the library effect ``name`` (module docstring, step 4) and measure what it explains of
+    ``acted`` (one of the residuals it moves: the fit itself does not depend on which).
 
     An effect whose direction comes from the residuals (``Effect.refine``) is fitted again with the context
-    ``context_of(scenario, signature)`` of its first fit, and the better of the two fits is kept."""
+    (:func:`gaitsim.loop.effects.context`) of its first fit, and the better of the two fits is kept."""
+    effect = fx.library_effect(name)
     fit = _fit_magnitude(simulate, effect, twin, measured, base, ctx, noise)
-    if effect.refine and context_of is not None and fit.side is not None:
-        refined = context_of(twin.with_changes(fit.changes).scenario, fit.side.signature)
+    if effect.refine and fit.side is not None:
+        refined = fx.context(measured.recording, twin.with_changes(fit.changes).scenario, measured.signature,
+                             fit.side.signature)
         again = _fit_magnitude(simulate, effect, twin, measured, base, refined, noise)
         fit = again if again.q_after < fit.q_after else fit
     return judged(fit, base, acted)
@@ -350,24 +362,74 @@ def prepare(rec: Recording, axis_map: str | None = None, distance_m: float | Non
     return mapped, frame, nav_reference(mapped, distance_m)
 
 
-def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = settings.MAX_ROUNDS,
-             log=lambda message: None, axis_map: str | None = None, distance_m: float | None = None) -> LoopResult:
+class Workers:
+    """Where the loop's independent simulations run: in this process (one worker) or on a local pool of worker
+    processes (:func:`gaitsim.experiments.runner.process_pool`). A task is a module-level function whose first
+    argument is a twin simulator: this process's, or the worker process's own (a walk a worker has simulated is
+    reused by its later tasks). A task's result follows from its arguments alone (seeded simulations), so it does
+    not depend on where it ran or on the number of workers.
+    """
+
+    def __init__(self, pool: concurrent.futures.Executor | None = None):
+        self.pool = pool
+        self.simulate = tw.TwinSimulator()
+
+    @classmethod
+    @contextlib.contextmanager
+    def started(cls, workers: int):
+        """``workers`` (>= 1) workers for the duration of the ``with`` block; one runs in this process."""
+        if workers < 1:
+            raise ValueError(f"workers = {workers}: must be >= 1")
+        if workers == 1:
+            yield cls()
+            return
+        from ..experiments.runner import process_pool
+        with process_pool(workers) as pool:
+            yield cls(pool)
+
+    def map(self, task, *arguments):
+        """The results of ``task(simulator, *args)`` for each tuple of ``arguments``, in order (an iterator: each
+        result as soon as it and those before it are done)."""
+        if self.pool is None:
+            return (task(self.simulate, *args) for args in zip(*arguments))
+        return self.pool.map(_in_worker, [task] * len(arguments[0]), *arguments)
+
+
+_WORKER_SIMULATOR: tw.TwinSimulator | None = None  # a pool worker's own simulator (:class:`Workers`)
+
+
+def _in_worker(task, *args):
+    global _WORKER_SIMULATOR
+    if _WORKER_SIMULATOR is None:
+        _WORKER_SIMULATOR = tw.TwinSimulator()
+    return task(_WORKER_SIMULATOR, *args)
+
+
+def run_loop(rec: Recording, max_rounds: int = settings.MAX_ROUNDS, log=lambda message: None,
+             axis_map: str | None = None, distance_m: float | None = None, workers: int = 1) -> LoopResult:
     """The whole loop on one recording (module docstring). ``log`` receives progress lines; ``axis_map`` is the
-    ``--axes`` map and ``distance_m`` the ``--distance`` of the command line.
+    ``--axes`` map and ``distance_m`` the ``--distance`` of the command line. ``workers`` processes run the
+    independent simulations (the comparison noise's seeds, a round's candidate effects; :class:`Workers`): the
+    result does not depend on their number.
 
     Raises
     ------
     RecordingError
         for a recording the loop cannot use (:func:`prepare`; too few regular strides).
     """
-    progress = Progress(log)
+    with Workers.started(workers) as pool:
+        return _run_loop(rec, max_rounds, Progress(log), axis_map, distance_m, pool)
+
+
+def _run_loop(rec: Recording, max_rounds: int, progress: Progress, axis_map: str | None, distance_m: float | None,
+              workers: Workers) -> LoopResult:
     rec, frame, ref = prepare(rec, axis_map, distance_m)
-    simulate = tw.TwinSimulator()
+    simulate = workers.simulate
     measured = measure(rec, ref)
     progress.note(f"navigated the recording ({ref.kind} reference): {measured.nav}")
     base_twin = tw.fit_twin(rec, measured.signature, measured.solution, simulate)
     progress.note("fitted the twin")
-    noise = comparison_noise(simulate, base_twin, measured, progress)
+    noise = comparison_noise(workers, base_twin, measured, progress)
     before = simulate_side(simulate, base_twin, measured, True)
     current_twin, current_side = base_twin, before
     current = compare(measured, before, noise)
@@ -376,7 +438,7 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
     fitted = {}  # effect name -> its fit to the current twin (an effect's fit depends on the twin, not on the
     # residual acted on: fitted once per twin)
     ctx = fx.context(rec, base_twin.scenario, measured.signature, before.signature)
-    for acted in unmovable(current, library):
+    for acted in unmovable(current, fx.LIBRARY):
         acted_names.add(acted.name)
         attributions.append(_record(acted, None, False, []))
         progress.note(f"{acted.name} (z = {acted.z:.1f}): moved by no effect of the library, unexplained")
@@ -389,15 +451,17 @@ def run_loop(rec: Recording, library: tuple = fx.LIBRARY, max_rounds: int = sett
         acted = ranked[0]
         acted_names.add(acted.name)
         ctx = fx.context(rec, current_twin.scenario, measured.signature, current_side.signature)
-        candidates = [e for e in library if acted.name in e.moves and e.name not in used and fx.applicable(e, ctx)]
+        candidates = [e for e in fx.LIBRARY if acted.name in e.moves and e.name not in used and fx.applicable(e, ctx)]
         progress.stage(f"round {round_number}, {acted.name} (z = {acted.z:.1f})", len(candidates))
-        fits = []
-        for e in candidates:
-            if e.name not in fitted:
-                fitted[e.name] = fit_effect(simulate, e, current_twin, measured, current, acted.name, ctx, noise,
-                                            lambda scenario, sig: fx.context(rec, scenario, measured.signature, sig))
-            fits.append(judged(fitted[e.name], current, acted.name))
-            progress.step(f"effects fitted ({e.name})")
+        new = [e.name for e in candidates if e.name not in fitted]
+        for _ in range(len(candidates) - len(new)):
+            progress.step("effects fitted (on this twin in an earlier round)")
+        n = len(new)
+        for fit in workers.map(fit_effect, new, [current_twin] * n, [measured] * n, [current] * n, [acted.name] * n,
+                               [ctx] * n, [noise] * n):
+            fitted[fit.effect.name] = fit
+            progress.step(f"effects fitted ({fit.effect.name})")
+        fits = [judged(fitted[e.name], current, acted.name) for e in candidates]
         ranked_fits = sorted(fits, key=lambda f: (f.acceptable, -f.total_after), reverse=True)
         best = ranked_fits[0] if ranked_fits else None
         accepted = best is not None and best.acceptable

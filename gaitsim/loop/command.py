@@ -49,8 +49,9 @@ def add_parser(subparsers) -> None:
                    help="walked distance (m) of a recording folder, compared with the navigated length")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
     p.add_argument("--jobs", type=int, default=1,
-                   help="datasets of 'all' run side by side in this many processes (default 1; results do not "
-                        "depend on it)")
+                   help="processes: the datasets of 'all' run side by side in this many, one dataset or recording "
+                        "folder runs each recording's independent simulations on this many (default 1; results "
+                        "do not depend on it)")
     p.set_defaults(func=run)
 
 
@@ -83,9 +84,9 @@ def _failure_report(title: str, exc: Exception) -> str:
     return f"# Sim-to-real loop: {title}\n\nThe loop could not run ({kind}): {exc}\n"
 
 
-def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[str], dict]:
-    """Run the loop on every recording of ``dataset``; returns the summary lines, the failures and the results
-    (label -> LoopResult) of the recordings that succeeded."""
+def _run_recordings(dataset: str, folder: Path, args, workers: int) -> tuple[list[str], list[str], dict]:
+    """Run the loop on every recording of ``dataset`` (each on ``workers`` processes); returns the summary lines,
+    the failures and the results (label -> LoopResult) of the recordings that succeeded."""
     lines, failures, results = [], [], {}
     try:
         recordings = _recordings(dataset, args.data)
@@ -97,7 +98,8 @@ def _run_recordings(dataset: str, folder: Path, args) -> tuple[list[str], list[s
         sub.mkdir(parents=True)
         try:
             result = attribution.run_loop(read(), max_rounds=args.rounds, axis_map=args.axes, distance_m=args.distance,
-                                          log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True))
+                                          log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True),
+                                          workers=workers)
             doc = report.write_result(result, sub, f"{dataset} / {label}")
         except Exception as exc:  # noqa: BLE001 -- any failure of one recording is reported, the others go on
             (sub / "report.md").write_text(_failure_report(f"{dataset} / {label}", exc))
@@ -151,13 +153,13 @@ def _run_blind(folder: Path) -> list[str]:
     return [f"| [blind tests](blind.md) | {'; '.join(summary)} | | |"]
 
 
-def _run_target(target: str, folder: Path, args) -> tuple[list[str], list[str], list[str]]:
-    """One target of the command (a dataset, ``blind`` or a recording folder) into ``folder``: its summary lines,
-    failures and held-out table lines."""
+def _run_target(target: str, folder: Path, args, workers: int = 1) -> tuple[list[str], list[str], list[str]]:
+    """One target of the command (a dataset, ``blind`` or a recording folder) into ``folder``, each recording's
+    loop on ``workers`` processes: its summary lines, failures and held-out table lines."""
     folder.mkdir(parents=True, exist_ok=True)
     if target == "blind":
         return _run_blind(folder), [], []
-    found, failed, results = _run_recordings(target, folder, args)
+    found, failed, results = _run_recordings(target, folder, args, workers)
     return found, failed, (_run_held_out(target, folder, results) if len(results) > 1 else [])
 
 
@@ -186,7 +188,7 @@ def run(args) -> int:
             with process_pool(min(args.jobs, len(targets))) as pool:
                 outcomes = list(pool.map(_run_target, targets, folders, [args] * len(targets)))
         else:
-            outcomes = [_run_target(target, folder, args) for target, folder in zip(targets, folders)]
+            outcomes = [_run_target(target, folder, args, args.jobs) for target, folder in zip(targets, folders)]
         for target, (found, failed, held) in zip(targets, outcomes):
             prefix = f"{target}/" if len(targets) > 1 else ""
             recordings += len(found)

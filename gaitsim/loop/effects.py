@@ -95,6 +95,15 @@ class Effect:
             high = min(high, 1.5 * context["largest_acc_component"])
         return low, high
 
+    def __reduce__(self):
+        """An effect is a library entry: it travels to a worker process (pickled) as its name."""
+        return library_effect, (self.name,)
+
+
+def library_effect(name: str) -> "Effect":
+    """The library's effect called ``name``."""
+    return BY_NAME[name]
+
 
 def _value(res: dict, name: str, side: str = "value") -> float | None:
     r = res.get(name)
