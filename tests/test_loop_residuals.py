@@ -99,15 +99,15 @@ def test_clipping_shows_as_flat_tops_and_a_sharp_peak_does_not():
 
 
 def test_scale_effects_compose_on_the_twins_matrix_instead_of_replacing_it():
-    """An axis scale named after an equal scale (or the other way round) multiplies the twin's matrix: its
-    magnitude is the axis's own error, and neither effect erases the other."""
-    twin = np.eye(3) * 1.02
-    axis = np.array(fx.BY_NAME["accel_scale_x"].changes(3.0, {"accel_misalignment": twin.tolist()})["sensor"][
+    """An axis scale named after another (or after the twin's own misalignment) multiplies that axis's row of the
+    twin's matrix: its magnitude is the axis's own error, and neither effect erases the other."""
+    twin = np.eye(3) * 1.02 + 0.001
+    x = np.array(fx.BY_NAME["accel_scale_x"].changes(3.0, {"accel_misalignment": twin.tolist()})["sensor"][
         "accel_misalignment"][0])
-    np.testing.assert_allclose(np.diag(axis), [1.02 * 1.03, 1.02, 1.02])
-    equal = np.array(fx.BY_NAME["accel_scale"].changes(-1.0, {"accel_misalignment": axis.tolist()})["sensor"][
+    np.testing.assert_allclose(x, twin * [[1.03], [1.0], [1.0]])
+    y = np.array(fx.BY_NAME["accel_scale_y"].changes(-1.0, {"accel_misalignment": x.tolist()})["sensor"][
         "accel_misalignment"][0])
-    np.testing.assert_allclose(equal, axis * 0.99)
+    np.testing.assert_allclose(y, twin * [[1.03], [0.99], [1.0]])
 
 
 def test_an_effect_fitted_on_the_edge_of_its_search_range_is_not_named():
