@@ -15,7 +15,6 @@ re-run the sensor model on the cached walk).
 | bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
-| accel_scale | [sensor] accel_misalignment = (1 + s) x the twin's | % | rest_acc_norm, accelerometer profiles, nav_length_ratio |
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
 | accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
@@ -142,11 +141,6 @@ def _creep_guess(res, ctx):
     return None if v is None else ctx["creep_mps"] + v
 
 
-def _scale_guess(res, ctx):
-    m, w = _value(res, "rest_acc_norm", "measured"), _value(res, "rest_acc_norm", "twin")
-    return None if m is None else 100.0 * (m / w - 1.0)
-
-
 def _bias_guess(axis: int):
     """Closed-form first guess of an accelerometer bias on ``axis`` from the rest norm: the norm residual over
     that axis's share of the rest specific force (None where the axis is near horizontal at rest: the norm
@@ -180,7 +174,7 @@ def _sensor(**items) -> dict:
 
 def _scaled_axis(matrix, axis: int, percent: float) -> list:
     """The twin's 3x3 sensor matrix with the output of its ``axis`` (that row) scaled by 1 + ``percent`` / 100:
-    a scale error of that axis on top of what the twin already has (an equal scale named before included)."""
+    a scale error of that axis on top of what the twin already has (another axis's scale named before included)."""
     out = np.array(matrix, float)
     out[axis] *= 1.0 + percent / 100.0
     return out.tolist()
@@ -230,12 +224,6 @@ LIBRARY: tuple[Effect, ...] = (
            (-30.0, 30.0),
            lambda m, ctx: _sensor(mounting_misalignment=[[*ctx["mount_roll_pitch_rad"], math.radians(m)], "rad"]),
            lambda res, ctx: _value(res, "swing_axis_yaw")),
-    Effect("accel_scale", "accelerometer scale factor error, equal on the three axes",
-           "[sensor] accel_misalignment", "%", ("rest_acc_norm", "nav_length_ratio") + ACC_PROFILES + CLOSURE,
-           (-5.0, 5.0),
-           lambda m, ctx: _sensor(accel_misalignment=[(np.asarray(ctx["accel_misalignment"]) * (1.0 + m / 100.0))
-                                                      .tolist(), "1"]),
-           _scale_guess),
     *(Effect(f"{sensor}_scale_{axis}", f"{label} scale factor error of the sensor's {axis} axis alone",
              f"[sensor] {sensor}_misalignment[{i}][{i}]", "%", CLOSURE + profiles + NAV + extra, (-6.0, 6.0),
              lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}))

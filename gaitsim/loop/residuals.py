@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import settings
-from .signature import CHANNELS, Signature, curve_shift_ms
+from .signature import CHANNELS, Signature
 
 UNITS = {
     "stance_gyro": "deg/s", **{f"stance_rate_{a}": "deg/s" for a in "xyz"}, "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
@@ -77,10 +77,6 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
         if w is None or not (math.isfinite(m.value) and math.isfinite(w.value)):
             continue
         out[name] = Residual(name, UNITS[name], m.value, w.value, m.value - w.value, uncertainty(name, m.se, w.se))
-    lag = _lag(measured, twin)
-    if lag is not None:  # the twin's mean curve is the template: its own shift is 0
-        out["acc_gyro_lag"] = Residual("acc_gyro_lag", UNITS["acc_gyro_lag"], lag[0], 0.0, lag[0],
-                                       uncertainty("acc_gyro_lag", lag[1]))
     for c in CHANNELS:
         m, w = measured.profiles[c], twin.profiles[c]
         name = f"profile_{c}"
@@ -95,26 +91,6 @@ def signature_misfit(res: dict) -> float:
     navigation and ``settings.DERIVED`` left out. The misfit the loop minimises and the held-out check scores."""
     return float(sum(r.z ** 2 for name, r in res.items()
                      if not name.startswith("nav_") and name not in settings.DERIVED and math.isfinite(r.z)))
-
-
-def _lag(measured: Signature, twin: Signature) -> tuple[float, float] | None:
-    """``acc_gyro_lag`` (ms): the shift of the measured strides' mean correlation curve against the twin's,
-    and its standard error, jackknifed over the strides of both sides (None without comparable curves)."""
-    m = measured.lag_curves[np.all(np.isfinite(measured.lag_curves), axis=1)]
-    w = twin.lag_curves[np.all(np.isfinite(twin.lag_curves), axis=1)]
-    if m.shape[1:] != w.shape[1:] or len(m) < 2 or len(w) < 2:
-        return None
-    value = curve_shift_ms(m.mean(0), w.mean(0), measured.rate_hz)
-    if not math.isfinite(value):
-        return None
-    variance = 0.0
-    for own, other, moving in ((m, w.mean(0), True), (w, m.mean(0), False)):
-        n = len(own)
-        left_out = [(own.sum(0) - c) / (n - 1) for c in own]
-        shifts = np.array([curve_shift_ms(c, other, measured.rate_hz) if moving else
-                           curve_shift_ms(other, c, measured.rate_hz) for c in left_out])
-        variance += (n - 1) / n * float(np.sum((shifts - shifts.mean()) ** 2))
-    return value, math.sqrt(variance)
 
 
 def profile_fit(measured: Signature, twin: Signature, factor: float = settings.PROFILE_SPREAD_FACTOR) -> dict:

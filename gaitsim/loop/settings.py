@@ -25,9 +25,9 @@ MIN_FRAME_STRIDES = 3  # strides between detected stances needed to check the fr
 # -- signature (gaitsim.loop.signature) ----------------------------------------------------------------------
 HF_EDGES_HZ = (40.0, 80.0)  # Hz, band edges of the hf40 / hf80 shares of |a| variance
 HF_NYQUIST_MARGIN = 1.25  # 1, a band share is computed only when the Nyquist frequency exceeds edge x this
-LAG_WINDOW_S = 0.06  # s, half-width of the |a| x |dw/dt| cross-correlation curve
-LAG_BAND_HZ = (8.0, 45.0)  # Hz, band pass of both signals before the cross-correlation
-LAG_UPSAMPLE = 20  # 1, the cross-correlation is evaluated at lags this much finer than the samples
+PUSH_OFF_S = 0.12  # s, window after each detected stance in which acc_gyro_lag fits the turn about the toe
+LAG_RANGE_MS = 15.0  # ms, acc_gyro_lag is searched over +- this
+LAG_STEP_MS = 1.0  # ms, grid step of that search (refined by a parabola)
 ONSET_HF_EDGE_HZ = 30.0  # Hz, high-pass edge of |a| for onset_hf
 ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is taken
 BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate

@@ -22,12 +22,9 @@ simulated, so two signatures can be compared number by number:
                                          the Nyquist frequency exceeds HF_NYQUIST_MARGIN times the edge)
    onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
                                          ONSET_WINDOW_S of the stance (impact ringing lives here)
-   acc_gyro_lag                ms        shift of the strides' mean cross-correlation curve of band-passed
-                                         |a| with |dw/dt| (+-LAG_WINDOW_S) against the twin's mean curve (>0:
-                                         the gyro's features come later); set by residuals.compare, with a
-                                         jackknife over the strides of both for its uncertainty (a single
-                                         stride's curve has several lobes of similar height), so a pure
-                                         relative delay of the gyro shows as its value
+   acc_gyro_lag                ms        the gyro's lag behind the accelerometer read from the push-off, a
+                                         turn about the still toe contact (:mod:`gaitsim.loop.lag`; > 0: the
+                                         gyro's samples come later), jackknife error over the stances
    swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
                                          momentum direction of the gyro, sign so that y > 0)
    stance_velocity             m/s       forward velocity of the position track (reference or truth) over
@@ -62,6 +59,7 @@ from nav.series import resample
 
 from . import settings
 from .closure import closure_between_stances, following, middle_thirds
+from .lag import push_off_lag
 from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
@@ -100,7 +98,6 @@ class Signature:
     stances : (n, 2) int, sample indices of each used stride's detected stance (start, end).
     rate_hz : median sample rate.
     spectrum : (frequencies Hz, mean power of |a| per stride, normalised to unit total) for figures.
-    lag_curves : (n, L) per-stride |a| x |dw/dt| cross-correlation curves (for ``acc_gyro_lag``).
     stationary : (N,) bool, the SHOE detection the strides were cut from (the twin fit re-uses it).
     gravity : m/s^2, the gravity that detection assumed (the recording's).
     """
@@ -111,7 +108,6 @@ class Signature:
     stances: np.ndarray
     rate_hz: float
     spectrum: tuple
-    lag_curves: np.ndarray
     stationary: np.ndarray
     gravity: float
 
@@ -133,46 +129,13 @@ def _band_share(x: np.ndarray, rate_hz: float, edge_hz: float) -> float:
     return float(100.0 * power[freq > edge_hz].sum() / total) if total > 0 else math.nan
 
 
-def _band_pass(x: np.ndarray, rate_hz: float, band: tuple = settings.LAG_BAND_HZ) -> np.ndarray:
+def _band_pass(x: np.ndarray, rate_hz: float, band: tuple) -> np.ndarray:
     """Zero-phase FFT band pass of ``x`` (band in Hz, upper edge at most ``settings.BAND_TOP_SHARE`` times the
     rate), mean removed."""
     spec = np.fft.rfft(x - x.mean())
     freq = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
     spec[(freq < band[0]) | (freq > min(band[1], settings.BAND_TOP_SHARE * rate_hz))] = 0.0
     return np.fft.irfft(spec, len(x))
-
-
-def _xcorr_curve(gyr: np.ndarray, acc_norm: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Normalised cross-correlation of band-passed |a| with band-passed |dw/dt| at lags -L..L samples in steps
-    of 1 / ``settings.LAG_UPSAMPLE`` sample: the inverse transform of their cross-spectrum, zero-padded (both
-    are band-limited, so the curve between samples is their correlation at a fractional lag, not an
-    interpolation)."""
-    a = _band_pass(acc_norm, rate_hz)
-    g = _band_pass(np.linalg.norm(np.gradient(gyr, axis=0), axis=1) * rate_hz, rate_hz)
-    max_lag = max(2, int(round(settings.LAG_WINDOW_S * rate_hz)))
-    up = settings.LAG_UPSAMPLE
-    n = len(a)
-    if n <= 2 * max_lag + 4:
-        return np.full(2 * max_lag * up + 1, math.nan)
-    corr = np.fft.irfft(np.conj(np.fft.rfft(a)) * np.fft.rfft(g), n * up) * up
-    corr = np.concatenate([corr[-max_lag * up:], corr[:max_lag * up + 1]])
-    scale = np.linalg.norm(a) * np.linalg.norm(g)
-    return corr / scale if scale > 0 else corr
-
-
-def curve_shift_ms(curve: np.ndarray, template: np.ndarray, rate_hz: float) -> float:
-    """Shift (ms) of a cross-correlation curve of :func:`_xcorr_curve` against ``template`` by least squares
-    over the inner half of the lag window (shifts up to half the window); positive: the gyro's features come
-    later relative to the accelerometer's than in the template. NaN for a curve with NaN."""
-    if not (np.all(np.isfinite(curve)) and np.all(np.isfinite(template))):
-        return math.nan
-    half = len(template) // 2
-    quarter = half // 2
-    inner = curve[half - quarter:half + quarter + 1]
-    # the template shifted by k = -quarter .. quarter is template[half - quarter - k:][:len(inner)]
-    windows = np.lib.stride_tricks.sliding_window_view(template, len(inner))[half - 2 * quarter:half + 1][::-1]
-    shift = int(np.argmin(np.sum((windows - inner) ** 2, axis=1))) - quarter
-    return 1000.0 * float(shift) / (settings.LAG_UPSAMPLE * rate_hz)
 
 
 def _swing_axis_yaw(gyr: np.ndarray) -> float:
@@ -253,9 +216,9 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
                                       rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
     for name, column in zip(CLOSURE, np.column_stack([closing.velocity, np.degrees(closing.tilt[:, :2])]).T):
         scalars[name] = mean_se(column)
-    curves = np.array([_xcorr_curve(gyr[s0:s1], acc_norm[s0:s1], rate) for s0, s1 in strides])
+    scalars["acc_gyro_lag"] = Scalar(*push_off_lag(t, acc, gyr, stances), np.empty(0))
     return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
-                     _spectrum(acc_norm, strides, rate), curves, result.stationary, float(gravity))
+                     _spectrum(acc_norm, strides, rate), result.stationary, float(gravity))
 
 
 def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat: np.ndarray,
