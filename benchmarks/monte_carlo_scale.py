@@ -51,7 +51,7 @@ STEPS = {
     "truth": [("gaitsim.experiments.tasks", "simulate_world")],
     "IMU model": [("gaitsim.experiments.tasks", "sense")],
     "compensation": [("nav.pipeline", "_calibrate"), ("nav.pipeline", "_stance_velocity")],
-    "checks, detection, alignment": [("nav.pipeline", "prepare")],
+    "checks, detection, alignment": [("nav.pipeline", "_prepare")],
     "filter": [("nav.pipeline", "run_filter"), ("nav.pipeline", "run_filter_batch")],
     "scoring": [("nav.pipeline", "score_solution")],
 }
