@@ -281,17 +281,18 @@ def _turned(p: PreparedRecording, yaw: float) -> np.ndarray:
 
 
 def _filter(preps: list[PreparedRecording], quat0: list[np.ndarray], rts: bool) -> list[FilterOutput]:
-    """The EKF over prepared recordings from the initial attitudes ``quat0``: one run, or one batch call."""
+    """The EKF over prepared recordings from the initial attitudes ``quat0``: one run, or one batch call; the
+    estimates' history only for the smoother (a solution keeps the final biases and g-sensitivity)."""
     config = FilterConfig(**preps[0].info["filter"])
     if len(preps) == 1:
         p = preps[0]
         return [run_filter(p.t, p.acc, p.gyr, p.stationary, quat0[0], pos0=p.pos0, start=p.start, config=config,
-                           method=p.method, stance_velocity=p.stance_velocity, rts=rts)]
+                           method=p.method, stance_velocity=p.stance_velocity, rts=rts, history=rts)]
     out = run_filter_batch(np.stack([p.t for p in preps]), np.stack([p.acc for p in preps]),
                            np.stack([p.gyr for p in preps]), np.stack([p.stationary for p in preps]), np.stack(quat0),
                            pos0=np.stack([p.pos0 for p in preps]), start=np.array([p.start for p in preps]),
                            config=config, method=preps[0].method,
-                           stance_velocity=np.stack([p.stance_velocity for p in preps]), rts=rts)
+                           stance_velocity=np.stack([p.stance_velocity for p in preps]), rts=rts, history=rts)
     return [out.of_run(i) for i in range(len(preps))]
 
 
