@@ -26,6 +26,7 @@ import math
 from collections import namedtuple
 from dataclasses import asdict, dataclass, fields
 
+import numba
 import numpy as np
 
 from ._numba import ekf as kernels
@@ -259,8 +260,9 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
     check_history(history, rts)
     out = empty_outputs((runs, n), config.states, history)
     skipped = np.zeros(runs, np.int64)
-    kernels.filter_batch(mechanisation_mode(method), t, acc, gyr, stationary, stance_velocity, start,
-                         q0, vel0, pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc,
-                         out.bias_gyr, out.gsens, out.p_diag, skipped)
+    with numba.parallel_chunksize(1):  # runs handed out one at a time: a core busy with other work takes fewer
+        kernels.filter_batch(mechanisation_mode(method), t, acc, gyr, stationary, stance_velocity, start,
+                             q0, vel0, pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos,
+                             out.bias_acc, out.bias_gyr, out.gsens, out.p_diag, skipped)
     out.skipped_updates = skipped
     return out
