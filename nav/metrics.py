@@ -258,8 +258,8 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
                       HeadingDriftWarning, stacklevel=2)
     out["heading_drift_deg_per_s"] = math.degrees(rate)
     out["heading_drift_deg_per_100m"] = math.degrees(rate) * duration / path * 100.0 if path else math.nan
-    horizontal = ep[:, :2] - rp[:, :2]
-    out["ate_m"] = float(np.sqrt(np.mean(np.sum(horizontal**2, axis=1))))
+    east, north = ep[:, 0] - rp[:, 0], ep[:, 1] - rp[:, 1]
+    out["ate_m"] = float(np.sqrt(np.mean(east**2 + north**2)))  # the sum over the two axes, without a reduction
     out["ate_alignment"] = "start: none beyond the common start point"
     if secondary:
         aligned = se2_aligned(ep[:, :2], rp[:, :2])
