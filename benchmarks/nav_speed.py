@@ -59,22 +59,14 @@ def synthetic_recording(duration=75.0, fs=800.0, seed=0) -> Recording:
     return Recording(t=t, acc=acc, gyr=gyr)
 
 
-def best_time(fn, repeats: int) -> float:
+def best_time(fn, repeats: int, clock=time.perf_counter) -> float:
+    """Shortest time (s) of ``repeats`` calls on ``clock``: wall by default, ``time.process_time`` for the CPU time
+    of all threads of this process."""
     times = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
-
-
-def cpu_time(fn, repeats: int) -> float:
-    """Best CPU time (s, all threads of this process) of ``repeats`` calls."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        fn()
-        times.append(time.process_time() - t0)
+        times.append(clock() - t0)
     return min(times)
 
 
@@ -160,8 +152,8 @@ def main(argv=None) -> int:
     batch()  # compile
     singles(1)
     seconds = best_time(batch, args.repeats)
-    cpu_batch = cpu_time(batch, args.repeats)
-    cpu_single = cpu_time(singles, args.repeats) / 4
+    cpu_batch = best_time(batch, args.repeats, time.process_time)
+    cpu_single = best_time(singles, args.repeats, time.process_time) / 4
     threads = numba.get_num_threads()
     total = args.runs * n / seconds
     print(f"  batch {args.runs} runs x {n} samples, 15-state forward, trajectory only: {total:,.0f} samples/s wall on "
