@@ -58,7 +58,7 @@ def walk_task(task: dict) -> dict:
         sensor = None if table is None else sensor_from_table(table, f"{task['key']} sensor {name}")
         recordings[name] = sense(truth, events, meta, sensor, task["seed"], task["run"])
     results = {}
-    for name, recording in recordings.items():  # one recording's variants together: checked once, filtered in a batch
+    for name, recording in recordings.items():  # a recording's variants together: its input checks run once
         variants = [v for v in task["variants"] if v["sensor"] == name]
         navigated = run_variants(recording, [_nav_options(nav, v) for v in variants], secondary=False)
         results.update({v["name"]: solution_score for v, solution_score in zip(variants, navigated)})
