@@ -45,13 +45,13 @@ HEADLINE = ("before", "both")  # the two pipelines of the paper's Table I
 TARGET_WALKS = 1000
 TARGET_S = 300.0  # the issue's target: 1000 walks in 5 minutes
 
-# step -> the (module, function) pairs whose time it sums; "compensation" runs inside "detection"'s prepare and is
-# subtracted from it, so every step is exclusive.
+# step -> the (module, function) pairs whose time it sums; "compensation" runs inside nav.pipeline._prepare (the
+# "checks, detection, alignment" step) and is subtracted from it, so every step is exclusive.
 STEPS = {
     "truth": [("gaitsim.experiments.tasks", "simulate_world")],
     "IMU model": [("gaitsim.experiments.tasks", "sense")],
     "compensation": [("nav.pipeline", "_calibrate"), ("nav.pipeline", "_stance_velocity")],
-    "checks, detection, alignment": [("nav.pipeline", "prepare")],
+    "checks, detection, alignment": [("nav.pipeline", "_prepare")],
     "filter": [("nav.pipeline", "run_filter"), ("nav.pipeline", "run_filter_batch")],
     "scoring": [("nav.pipeline", "score_solution")],
 }

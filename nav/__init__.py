@@ -24,7 +24,8 @@ from .lazy import lazy_exports
 _EXPORTS = {
     "detectors": ("DetectorParams", "DetectorResult", "convert_threshold", "detect", "oracle"),
     "ekf": ("FilterConfig", "FilterOutput", "run_filter", "run_filter_batch"),
-    "pipeline": ("HeadingSource", "NavOptions", "navigate", "run", "score_solution"),
+    "pipeline": ("HeadingSource", "NavOptions", "navigate", "navigate_variants", "run", "run_variants",
+                 "score_solution"),
     "solution": ("Solution", "write_solution"),
     "strapdown": ("integrate",),
 }

@@ -109,9 +109,13 @@ def align(acc: np.ndarray, stationary: np.ndarray, yaw: float = 0.0,
 
 
 def yaw_of(q: np.ndarray) -> np.ndarray:
-    """Heading (rad, counter-clockwise from east) of the body x axis of attitudes q (..., 4)."""
-    c = quat.to_matrix(q)
-    return np.arctan2(c[..., 1, 0], c[..., 0, 0])
+    """Heading (rad, counter-clockwise from east) of the body x axis of attitudes q (..., 4).
+
+    The angle of the first column of :func:`nav.quaternion.to_matrix` (its two entries computed alone, with the
+    same expressions: the same floats).
+    """
+    w, x, y, z = np.moveaxis(np.asarray(q, float), -1, 0)
+    return np.arctan2(2 * (x * y + w * z), 1 - 2 * (y * y + z * z))
 
 
 def first_leg_direction(t: np.ndarray, pos: np.ndarray, t0: float, leg_length: float = 3.0) -> tuple[float, float]:

@@ -106,8 +106,9 @@ def quietest_window(acc: np.ndarray, length: int) -> tuple[int, int]:
     """(start, end) of the window of ``length`` samples with the smallest specific-force variance."""
     n = len(acc)
     length = max(2, min(length, n))
-    c = np.cumsum(np.concatenate([np.zeros((1, 3)), acc - acc.mean(axis=0)]), axis=0)
-    c2 = np.cumsum(np.concatenate([[0.0], np.sum((acc - acc.mean(axis=0)) ** 2, axis=1)]))
+    centred = acc - acc.mean(axis=0)
+    c = np.cumsum(np.concatenate([np.zeros((1, 3)), centred]), axis=0)
+    c2 = np.cumsum(np.concatenate([[0.0], np.sum(centred ** 2, axis=1)]))
     s1 = c[length:] - c[:-length]
     s2 = c2[length:] - c2[:-length]
     var = s2 - np.sum(s1**2, axis=1) / length
@@ -126,8 +127,8 @@ def rest_runs(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
     return starts[long_enough], ends[long_enough]
 
 
-def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray,
-                          gravity: float) -> tuple[np.ndarray, np.ndarray]:
+def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
+                          rests: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Speed (m/s) and tilt (rad) each stride ends with when the gyro carries the accelerometer's attitude.
 
     For each pair of rests (:func:`rest_runs`) ``STRIDE_RANGE_S`` apart, the attitude levelled on the first
@@ -137,14 +138,14 @@ def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray,
     specific force stay small (cm/s, degrees) for a consistent sensor, and grow to m/s and tens of degrees for a
     gyro scaled wrong (or in deg/s) against the accelerometer: gravity is projected with the wrong attitude
     through the swing. (Flipping every accelerometer sign mirrors the walk and closes; that one shows at rest as
-    gravity along -z.)
+    gravity along -z.) ``rests``: ``rest_runs(t, acc, gyr, gravity)`` when the caller has them already.
 
     Returns
     -------
     speed : (strides,) m/s, |v| at the first sample of the next rest.
     tilt : (strides,) rad, angle between the carried and the read gravity direction there.
     """
-    starts, ends = rest_runs(t, acc, gyr, gravity)
+    starts, ends = rest_runs(t, acc, gyr, gravity) if rests is None else rests
     first, last = ends[:-1] - 1, starts[1:]
     stride = (STRIDE_RANGE_S[0] <= t[last] - t[first]) & (t[last] - t[first] <= STRIDE_RANGE_S[1])
     rests = np.column_stack([starts, ends])
@@ -256,7 +257,8 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
     if static_w > MAX_STATIC_RATE:
         report.warn(f"{name}: mean rate in the quietest window is {static_w:.4g} rad/s "
                     f"({math.degrees(static_w):.3g} deg/s) at rest: gyro in deg/s or a large uncompensated bias")
-    starts, _ = rest_runs(t, acc, gyr, gravity, START_REST_S)
+    rests = rest_runs(t, acc, gyr, gravity)  # the long ones among them are those rest_runs keeps at START_REST_S
+    starts = rests[0][t[rests[1] - 1] - t[rests[0]] >= START_REST_S]
     first_rest = float(t[starts[0]] - t[0]) if len(starts) else math.inf
     report.counts["first_rest_s"] = first_rest
     if first_rest > 0:
@@ -269,7 +271,7 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
     if clipped:
         report.warn(f"{name}: flat tops at a column's extreme value (possible clipping), samples per column: "
                     f"{clipped}", clipped_samples=clipped)
-    speed, tilt = closure_between_rests(t, acc, gyr, gravity)
+    speed, tilt = closure_between_rests(t, acc, gyr, gravity, rests)
     report.counts["closure_strides"] = len(speed)
     if len(speed) >= MIN_CLOSURE_STRIDES:
         median = float(np.median(speed))

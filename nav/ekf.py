@@ -26,6 +26,7 @@ import math
 from collections import namedtuple
 from dataclasses import asdict, dataclass, fields
 
+import numba
 import numpy as np
 
 from ._numba import ekf as kernels
@@ -122,6 +123,8 @@ class FilterOutput:
     bias_acc : (..., N, 3) m/s^2, bias_gyr : (..., N, 3) rad/s, gsens : (..., N, 9) rad/s per m/s^2 -- the
         estimates (zero when not estimated).
     p_diag : (..., N, states) filtered error-state variances (SI units squared).
+    Without the estimates' history (``history=False`` in :func:`run_filter`) bias_acc, bias_gyr, gsens and
+    p_diag have one row in place of N: the last sample's.
     skipped_updates : int or (R,) array, updates skipped because a covariance was not positive definite.
     """
 
@@ -140,12 +143,16 @@ class FilterOutput:
                             self.gsens[r], self.p_diag[r], self.skipped_updates[r])
 
 
-def empty_outputs(shape: tuple[int, ...], states: int) -> FilterOutput:
-    """Uninitialised estimate arrays for ``shape`` (runs, samples) or (samples,); the filter fills every row."""
+def empty_outputs(shape: tuple[int, ...], states: int, history: bool = True) -> FilterOutput:
+    """Uninitialised estimate arrays for ``shape`` (runs, samples) or (samples,); the filter fills every row.
+    ``history`` False: one row for the biases, g-sensitivity and variances (the last sample's)."""
     def rows(*tail):
         return np.empty(shape + tail)
 
-    return FilterOutput(rows(4), rows(3), rows(3), rows(3), rows(3), rows(9), rows(states), 0)
+    def estimates(*tail):
+        return np.empty(shape[:-1] + (1,) + tail) if not history else rows(*tail)
+
+    return FilterOutput(rows(4), rows(3), rows(3), estimates(3), estimates(3), estimates(9), estimates(states), 0)
 
 
 def per_sample_stance_velocity(stance_velocity, shape: tuple[int, ...]) -> np.ndarray:
@@ -174,9 +181,16 @@ def check_filter_inputs(t, acc, gyr, stationary, start: int):
     return t, acc, gyr, stationary
 
 
+def check_history(history: bool, rts: bool) -> None:
+    """ValueError when the RTS smoother is asked for without the estimates' history it reads back."""
+    if rts and not history:
+        raise ValueError("run_filter: rts=True needs history=True (the smoother reads every sample's estimates)")
+
+
 def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
                vel0=(0.0, 0.0, 0.0), pos0=(0.0, 0.0, 0.0), start: int = 0, config: FilterConfig = FilterConfig(),
-               method: str = "rk4", stance_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
+               method: str = "rk4", stance_velocity: np.ndarray | None = None, rts: bool = False,
+               history: bool = True) -> FilterOutput:
     """Run the ZUPT-aided EKF over one recording.
 
     Parameters
@@ -192,6 +206,10 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
     stance_velocity : None (zero), a (3,) constant or an (N, 3) per-sample velocity in m/s in the foot's
         heading frame (x forward along the horizontal heading, y left, z up), used at stationary samples.
     rts : smooth the state with an RTS pass after the forward filter.
+    history : keep the bias, g-sensitivity and variance estimates of every sample (default); False keeps the last
+        sample's alone (see :class:`FilterOutput`), which for 15 states cuts what the filter writes per sample
+        from 40 to 10 numbers (the trajectory). The smoother reads the history back: False with ``rts`` is an
+        error.
 
     Returns
     -------
@@ -200,8 +218,9 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
     t, acc, gyr, stationary = check_filter_inputs(t, acc, gyr, stationary, start)
     n = len(t)
     mode = mechanisation_mode(method)
+    check_history(history, rts)
     stance_velocity = per_sample_stance_velocity(stance_velocity, (n,))
-    out = empty_outputs((n,), config.states)
+    out = empty_outputs((n,), config.states, history)
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
     out.skipped_updates = kernels.filter_run(
         mode, t, acc, gyr, stationary, stance_velocity, int(start), q0, np.asarray(vel0, float),
@@ -212,7 +231,7 @@ def run_filter(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.n
 
 def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary: np.ndarray, quat0: np.ndarray,
                      vel0=None, pos0=None, start=None, config: FilterConfig = FilterConfig(), method: str = "rk4",
-                     stance_velocity: np.ndarray | None = None, rts: bool = False) -> FilterOutput:
+                     stance_velocity: np.ndarray | None = None, rts: bool = False, history: bool = True) -> FilterOutput:
     """Run the filter over R recordings of N samples each in one compiled call (runs spread over cores).
 
     Same parameters as :func:`run_filter` with a leading run axis: t (R, N) or (N,) shared, acc and gyr
@@ -238,10 +257,12 @@ def run_filter_batch(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stationary
                                                                                np.int64)
     if np.any(start < 0) or np.any(start >= n):
         raise ValueError(f"run_filter_batch: start samples {start} outside 0..{n - 1}")
-    out = empty_outputs((runs, n), config.states)
+    check_history(history, rts)
+    out = empty_outputs((runs, n), config.states, history)
     skipped = np.zeros(runs, np.int64)
-    kernels.filter_batch(mechanisation_mode(method), t, acc, gyr, stationary, stance_velocity, start,
-                         q0, vel0, pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos, out.bias_acc,
-                         out.bias_gyr, out.gsens, out.p_diag, skipped)
+    with numba.parallel_chunksize(1):  # runs handed out one at a time: a core busy with other work takes fewer
+        kernels.filter_batch(mechanisation_mode(method), t, acc, gyr, stationary, stance_velocity, start,
+                             q0, vel0, pos0, config.for_kernel(), bool(rts), out.quat, out.vel, out.pos,
+                             out.bias_acc, out.bias_gyr, out.gsens, out.p_diag, skipped)
     out.skipped_updates = skipped
     return out

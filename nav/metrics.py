@@ -52,6 +52,12 @@ def _path_length(t: np.ndarray, pos: np.ndarray) -> float:
     return float(np.sum(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
 
 
+def finite_rows(a: np.ndarray) -> np.ndarray:
+    """(N,) bool, the rows of a (N, k) array with every value finite (``np.all(np.isfinite(a), axis=1)``, column
+    by column: a third of the time on (N, 3))."""
+    return np.logical_and.reduce([np.isfinite(a[:, i]) for i in range(a.shape[1])])
+
+
 def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
 
@@ -196,7 +202,7 @@ def stride_length_ratio(t: np.ndarray, pos: np.ndarray, stationary: np.ndarray, 
 
 
 def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray, quat: np.ndarray | None = None,
-          ref_quat: np.ndarray | None = None, stationary: np.ndarray | None = None) -> dict:
+          ref_quat: np.ndarray | None = None, stationary: np.ndarray | None = None, secondary: bool = True) -> dict:
     """Score an estimated track against a true or reference track.
 
     Parameters
@@ -205,6 +211,9 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
     ref_t : (M,) s, ref_pos : (M, 3) m -- truth or reference on its own clock (NaN rows ignored).
     quat, ref_quat : (N, 4) and (M, 4) attitudes; when both are given the heading drift uses them.
     stationary : (N,) bool, the estimate's ZUPT flags; when given, ``stride_length_ratio`` is added.
+    secondary : also score ``path_length_ratio``, ``stride_length_ratio``, ``track_heading_drift_deg_per_s`` and
+        ``ate_se2_m`` (about a third of the cost); False leaves those keys out (Monte Carlo studies that read
+        only the end-point errors, the heading drift and ``ate_m``). The other scores are the same either way.
 
     Returns
     -------
@@ -212,11 +221,11 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
     """
     t = np.asarray(t, float)
     pos = np.asarray(pos, float)
-    ok = np.all(np.isfinite(pos), axis=1)
+    ok = finite_rows(pos)
     t_est, p_est = t[ok], pos[ok]
     ref_t = np.asarray(ref_t, float)
     ref_pos = np.asarray(ref_pos, float)
-    rok = np.all(np.isfinite(ref_pos), axis=1) & (ref_t >= t_est[0]) & (ref_t <= t_est[-1])
+    rok = finite_rows(ref_pos) & (ref_t >= t_est[0]) & (ref_t <= t_est[-1])
     rt, rp = ref_t[rok], ref_pos[rok]
     if len(rt) < 2:
         raise ValueError("score: the reference does not overlap the navigated time span")
@@ -224,13 +233,17 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
     out = end_point_errors(ep[-1], rp[0], rp[-1])
     duration = float(rt[-1] - rt[0])
     path = _path_length(rt, rp)
-    ratio = _path_length(rt, ep) / path if path else math.nan
-    out.update(duration_s=duration, path_length_m=path, path_length_ratio=ratio)
-    if stationary is not None:
-        out["stride_length_ratio"] = stride_length_ratio(t, pos, np.asarray(stationary, bool), rt, rp)
-    track_rate = heading_drift(rt, track_heading_error(ep, rp))
-    out["track_heading_drift_deg_per_s"] = math.degrees(track_rate)
-    if quat is not None and ref_quat is not None:
+    out.update(duration_s=duration, path_length_m=path)
+    if secondary:
+        out["path_length_ratio"] = _path_length(rt, ep) / path if path else math.nan
+        if stationary is not None:
+            out["stride_length_ratio"] = stride_length_ratio(t, pos, np.asarray(stationary, bool), rt, rp)
+    attitudes = quat is not None and ref_quat is not None
+    if secondary or not attitudes:
+        track_rate = heading_drift(rt, track_heading_error(ep, rp))
+        if secondary:
+            out["track_heading_drift_deg_per_s"] = math.degrees(track_rate)
+    if attitudes:
         q_est = np.asarray(quat, float)[ok]
         yaw_est = np.interp(rt, t_est, np.unwrap(yaw_of(q_est)))
         rate = heading_drift(rt, _wrap(yaw_est - yaw_of(np.asarray(ref_quat, float)[rok])))
@@ -245,11 +258,12 @@ def score(t: np.ndarray, pos: np.ndarray, ref_t: np.ndarray, ref_pos: np.ndarray
                       HeadingDriftWarning, stacklevel=2)
     out["heading_drift_deg_per_s"] = math.degrees(rate)
     out["heading_drift_deg_per_100m"] = math.degrees(rate) * duration / path * 100.0 if path else math.nan
-    horizontal = ep[:, :2] - rp[:, :2]
-    out["ate_m"] = float(np.sqrt(np.mean(np.sum(horizontal**2, axis=1))))
+    east, north = ep[:, 0] - rp[:, 0], ep[:, 1] - rp[:, 1]
+    out["ate_m"] = float(np.sqrt(np.mean(east**2 + north**2)))  # the sum over the two axes, without a reduction
     out["ate_alignment"] = "start: none beyond the common start point"
-    aligned = se2_aligned(ep[:, :2], rp[:, :2])
-    out["ate_se2_m"] = float(np.sqrt(np.mean(np.sum((aligned - rp[:, :2]) ** 2, axis=1))))
+    if secondary:
+        aligned = se2_aligned(ep[:, :2], rp[:, :2])
+        out["ate_se2_m"] = float(np.sqrt(np.mean(np.sum((aligned - rp[:, :2]) ** 2, axis=1))))
     return out
 
 

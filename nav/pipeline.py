@@ -23,7 +23,7 @@ from . import quaternion as quat
 from .adaptive_detector import AdaptiveThreshold, detect_adaptive
 from .alignment import DEFAULT_MIN_SAMPLES, align, first_leg_direction, yaw_of
 from .calibration import TERM_GROUPS, load_calibration
-from .checks import ALLOWABLE, check_recording, check_stance_found
+from .checks import ALLOWABLE, CheckReport, check_recording, check_stance_found
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 from .ekf import FilterConfig, FilterOutput, run_filter, run_filter_batch
 from .recording import Recording, RecordingError
@@ -213,10 +213,24 @@ def _initial_position(rec: Recording, start: int) -> np.ndarray:
     return np.zeros(3)
 
 
+def _checked(rec: Recording, options: NavOptions, reports: dict) -> CheckReport:
+    """The input checks of ``rec`` at the options' gravity and allowances; ``reports`` holds those already run on
+    this recording, by (gravity, allowances): each pair is checked once."""
+    key = (_gravity(rec, options), tuple(sorted(options.allow)))
+    if key not in reports:
+        reports[key] = check_recording(rec, key[0], allow=options.allow)
+    return reports[key]
+
+
 def prepare(rec: Recording, options: NavOptions = NavOptions()) -> PreparedRecording:
     """Checks, calibration, detection, alignment and stance velocity of one recording (no filtering)."""
+    return _prepare(rec, options, {})
+
+
+def _prepare(rec: Recording, options: NavOptions, reports: dict) -> PreparedRecording:
+    """:func:`prepare` with the input checks of :func:`_checked` (``reports``: those already run on ``rec``)."""
     gravity = _gravity(rec, options)
-    report = check_recording(rec, gravity, allow=options.allow)
+    report = _checked(rec, options, reports)
     acc, gyr, cal_info = _calibrate(rec, options)
     result = _detect(rec, acc, gyr, options, gravity)
     check_stance_found(result.stationary, str(result.params.as_dict()),
@@ -238,8 +252,8 @@ def prepare(rec: Recording, options: NavOptions = NavOptions()) -> PreparedRecor
         "calibration": cal_info,
         "stance_velocity": stance_velocity_source,
         "rts": options.rts,
-        "warnings": report.warnings,
-        "input_counts": report.counts,
+        "warnings": list(report.warnings),
+        "input_counts": dict(report.counts),
     }
     return PreparedRecording(np.asarray(rec.t, float), acc, gyr, result.stationary, method, start, alignment.quat0,
                              _initial_position(rec, start), stance_velocity, heading_source, info)
@@ -267,17 +281,18 @@ def _turned(p: PreparedRecording, yaw: float) -> np.ndarray:
 
 
 def _filter(preps: list[PreparedRecording], quat0: list[np.ndarray], rts: bool) -> list[FilterOutput]:
-    """The EKF over prepared recordings from the initial attitudes ``quat0``: one run, or one batch call."""
+    """The EKF over prepared recordings from the initial attitudes ``quat0``: one run, or one batch call; the
+    estimates' history only for the smoother (a solution keeps the final biases and g-sensitivity)."""
     config = FilterConfig(**preps[0].info["filter"])
     if len(preps) == 1:
         p = preps[0]
         return [run_filter(p.t, p.acc, p.gyr, p.stationary, quat0[0], pos0=p.pos0, start=p.start, config=config,
-                           method=p.method, stance_velocity=p.stance_velocity, rts=rts)]
+                           method=p.method, stance_velocity=p.stance_velocity, rts=rts, history=rts)]
     out = run_filter_batch(np.stack([p.t for p in preps]), np.stack([p.acc for p in preps]),
                            np.stack([p.gyr for p in preps]), np.stack([p.stationary for p in preps]), np.stack(quat0),
                            pos0=np.stack([p.pos0 for p in preps]), start=np.array([p.start for p in preps]),
                            config=config, method=preps[0].method,
-                           stance_velocity=np.stack([p.stance_velocity for p in preps]), rts=rts)
+                           stance_velocity=np.stack([p.stance_velocity for p in preps]), rts=rts, history=rts)
     return [out.of_run(i) for i in range(len(preps))]
 
 
@@ -319,18 +334,30 @@ def navigate(recordings: Recording | list[Recording], options: NavOptions = NavO
     return [_navigate_together([rec], [p], options.rts)[0] for rec, p in zip(recs, preps)]
 
 
-def score_solution(rec: Recording, sol: Solution) -> dict:
-    """Scores of a solution (nav.metrics) plus the run's parameters; keys documented in nav.metrics."""
+def navigate_variants(rec: Recording, variants: list[NavOptions]) -> list[Solution]:
+    """Navigate one recording under several option sets (a study's pipeline variants), in order.
+
+    The recording's input checks run once per gravity and allowance set, not once per variant. Each solution
+    equals ``navigate(rec, options)``. The variants are filtered one after the other: the batch call costs more
+    than separate runs for two or three runs on one core (it stacks the inputs), so it pays only across cores.
+    """
+    reports: dict = {}
+    return [_navigate_together([rec], [_prepare(rec, options, reports)], options.rts)[0] for options in variants]
+
+
+def score_solution(rec: Recording, sol: Solution, secondary: bool = True) -> dict:
+    """Scores of a solution (nav.metrics) plus the run's parameters; keys documented in nav.metrics
+    (``secondary``: see :func:`nav.metrics.score`)."""
     result = {"scored_against": None}
     if rec.truth is not None:
         result.update(metrics.score(sol.t, sol.pos, rec.truth.t, rec.truth.pos, sol.quat, rec.truth.quat,
-                                    sol.stationary))
+                                    sol.stationary, secondary))
         result["scored_against"] = "truth"
         if len(rec.truth.t) == len(sol.t):  # stance labels on the IMU's samples (no clock error or skew)
             result["detector_confusion"] = metrics.confusion(sol.stationary[sol.start:], rec.truth.stance[sol.start:])
     elif rec.reference is not None:
         result.update(metrics.score(sol.t, sol.pos, rec.reference.t, rec.reference.pos,
-                                    stationary=sol.stationary))
+                                    stationary=sol.stationary, secondary=secondary))
         result["scored_against"] = "reference"
     end = sol.pos[-1]
     result["estimated_end_m"] = end.tolist()
@@ -346,5 +373,10 @@ def score_solution(rec: Recording, sol: Solution) -> dict:
 
 def run(rec: Recording, options: NavOptions = NavOptions()) -> tuple[Solution, dict]:
     """Navigate and score one recording: ``(solution, score)``."""
-    sol = navigate(rec, options)
-    return sol, score_solution(rec, sol)
+    return run_variants(rec, [options])[0]
+
+
+def run_variants(rec: Recording, variants: list[NavOptions], secondary: bool = True) -> list[tuple[Solution, dict]]:
+    """Navigate (:func:`navigate_variants`) and score one recording under several option sets: ``(solution,
+    score)`` per variant, in order (``secondary``: see :func:`nav.metrics.score`)."""
+    return [(sol, score_solution(rec, sol, secondary)) for sol in navigate_variants(rec, variants)]

@@ -123,6 +123,26 @@ def test_batch_equals_single_runs(rts):
         assert np.isnan(single.pos[: start[r]]).all()
 
 
+def test_without_history_the_estimates_hold_the_last_sample_and_the_trajectory_is_unchanged():
+    runs, n = 2, 3000
+    t, acc, gyr, st = walk_like(runs, n, seed=7)
+    q0 = Q.from_euler_zyx(np.array([0.3, -1.0]), 0.0, 0.0)
+    cfg = FilterConfig(states=24, zaru=True)
+    start = np.array([0, 11])
+    for full, last in ((run_filter(t, acc[1], gyr[1], st[1], q0[1], start=11, config=cfg),
+                        run_filter(t, acc[1], gyr[1], st[1], q0[1], start=11, config=cfg, history=False)),
+                       (run_filter_batch(t, acc, gyr, st, q0, start=start, config=cfg),
+                        run_filter_batch(t, acc, gyr, st, q0, start=start, config=cfg, history=False))):
+        for name in ("pos", "vel", "quat"):
+            np.testing.assert_array_equal(getattr(last, name), getattr(full, name))
+        for name in ("bias_acc", "bias_gyr", "gsens", "p_diag"):
+            kept, every = getattr(last, name), getattr(full, name)
+            assert kept.shape[-2] == 1 and every.shape[-2] == n
+            np.testing.assert_array_equal(kept[..., 0, :], every[..., -1, :])
+    with pytest.raises(ValueError, match="rts=True needs history=True"):
+        run_filter(t, acc[0], gyr[0], st[0], q0[0], config=cfg, rts=True, history=False)
+
+
 def test_covariance_stays_positive_on_a_noisy_walk():
     t, acc, gyr, st = walk_like(1, 9000, seed=6)
     for states in (9, 15, 24):

@@ -71,6 +71,26 @@ def test_ate_after_se2_alignment_removes_a_rigid_motion():
     assert scores["ate_se2_m"] < 1e-9
 
 
+def test_primary_scores_alone_equal_those_of_the_full_score():
+    t, truth = straight_north()
+    truth[:, 0] = np.sin(truth[:, 1] / 10.0)
+    est = truth * [1.0, 0.98, 1.0] + [0.1, 0.0, 0.0]
+    q_true = yaw_quat(np.full(len(t), np.pi / 2))
+    q_est = yaw_quat(np.pi / 2 + 1e-4 * t)
+    stationary = (np.arange(len(t)) % 50) < 20
+    full = metrics.score(t, est, t, truth, q_est, q_true, stationary)
+    primary = metrics.score(t, est, t, truth, q_est, q_true, stationary, secondary=False)
+    left_out = {"path_length_ratio", "stride_length_ratio", "track_heading_drift_deg_per_s", "ate_se2_m"}
+    assert set(full) - set(primary) == left_out
+    assert all(primary[k] == full[k] for k in primary)
+
+
+def test_finite_rows_is_every_value_finite():
+    a = np.ones((6, 3))
+    a[1, 0], a[3, 2], a[4, 1] = np.nan, np.inf, -np.inf
+    np.testing.assert_array_equal(metrics.finite_rows(a), [True, False, True, False, False, True])
+
+
 def test_confusion_counts():
     det = np.array([1, 1, 0, 0, 1], bool)
     true = np.array([1, 0, 0, 1, 1], bool)

@@ -97,6 +97,24 @@ def test_batch_navigation_equals_single_navigation():
         assert b.start == single.start
 
 
+def test_variants_of_one_recording_are_checked_once_and_equal_navigating_each(walk, monkeypatch):
+    checked = []
+    check = pipeline.check_recording
+    monkeypatch.setattr(pipeline, "check_recording", lambda *args, **kw: checked.append(1) or check(*args, **kw))
+    variants = [pipeline.NavOptions(detector="shoe", method="rk4"),
+                pipeline.NavOptions(detector="oracle", method="rk4", filter=FilterConfig(states=15)),
+                pipeline.NavOptions(detector="shoe", method="rk4", gravity=9.80)]
+    together = pipeline.run_variants(walk, variants, secondary=False)
+    assert len(checked) == 2  # one per gravity
+    for options, (sol, score) in zip(variants, together):
+        alone, full = pipeline.run(walk, options)
+        np.testing.assert_array_equal(sol.pos, alone.pos)
+        np.testing.assert_array_equal(sol.quat, alone.quat)
+        assert set(score) < set(full)
+        np.testing.assert_equal(score, {k: full[k] for k in score})  # NaN equal to NaN (the oracle's threshold)
+        assert "ate_se2_m" in full and "ate_se2_m" not in score
+
+
 # ------------------------------------------------------------------------------------------- the simulator's walk
 @pytest.fixture(scope="module")
 def simulated():

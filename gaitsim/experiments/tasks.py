@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nav.pipeline import run
+from nav.pipeline import run_variants
 from nav.recording import Recording
 
 from ..imu.config import sensor_from_table
@@ -17,6 +17,8 @@ from ..simulate import sense, simulate_world
 from .setup import NavSettings
 
 TRACK_POINTS = 200  # decimated track kept for figures
+SCORES = ("along_track_error_m", "perpendicular_error_m", "final_error_m", "length_ratio", "heading_drift_deg_per_s",
+          "ate_m")  # what a task keeps of each variant's scores (nav.metrics), besides the stationary fraction
 
 
 def _nav_options(nav: NavSettings, variant: dict):
@@ -55,12 +57,16 @@ def walk_task(task: dict) -> dict:
     for name, table in task["sensors"].items():  # common random numbers across sensor variants
         sensor = None if table is None else sensor_from_table(table, f"{task['key']} sensor {name}")
         recordings[name] = sense(truth, events, meta, sensor, task["seed"], task["run"])
+    results = {}
+    for name, recording in recordings.items():  # a recording's variants together: its input checks run once
+        variants = [v for v in task["variants"] if v["sensor"] == name]
+        navigated = run_variants(recording, [_nav_options(nav, v) for v in variants], secondary=False)
+        results.update({v["name"]: solution_score for v, solution_score in zip(variants, navigated)})
     out = {}
     keep = set(task.get("keep_tracks", ()))
     for variant in task["variants"]:
-        sol, score = run(recordings[variant["sensor"]], _nav_options(nav, variant))
-        entry = {k: float(score[k]) for k in ("along_track_error_m", "perpendicular_error_m", "final_error_m",
-                                              "length_ratio", "heading_drift_deg_per_s", "ate_m")}
+        sol, score = results[variant["name"]]
+        entry = {k: float(score[k]) for k in SCORES}
         entry["stationary_fraction"] = float(sol.stationary.mean())
         if variant["name"] in keep:
             idx = np.linspace(sol.start, len(sol.t) - 1, TRACK_POINTS).astype(int)

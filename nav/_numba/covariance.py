@@ -23,12 +23,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .linalg import spd_inverse
+from .linalg import inverse_buffers, spd_inverse
 
 
 @njit(cache=True)
-def _transition_column(X, n, j, h, a, C, f, inverse):
-    """Column j of X <- Phi X[:, j] (or Phi^-1 X[:, j]); only its rows 0:9 change."""
+def _transition_column(X, n, j, h, a, C, f, inverse, first_row):
+    """Column j of X <- Phi X[:, j] (or Phi^-1 X[:, j]); only its rows first_row:9 change and are computed
+    (``first_row`` 0, 3 or 6; the rows above it are left as they are: callers that need the lower triangle)."""
     p0, p1, p2 = X[0, j], X[1, j], X[2, j]
     v0, v1, v2 = X[3, j], X[4, j], X[5, j]
     t0, t1, t2 = X[6, j], X[7, j], X[8, j]
@@ -42,23 +43,27 @@ def _transition_column(X, n, j, h, a, C, f, inverse):
             g0 += f[0] * X[15, j] + f[1] * X[16, j] + f[2] * X[17, j]
             g1 += f[0] * X[18, j] + f[1] * X[19, j] + f[2] * X[20, j]
             g2 += f[0] * X[21, j] + f[1] * X[22, j] + f[2] * X[23, j]
-        ca0 = C[0, 0] * b0 + C[0, 1] * b1 + C[0, 2] * b2
-        ca1 = C[1, 0] * b0 + C[1, 1] * b1 + C[1, 2] * b2
-        ca2 = C[2, 0] * b0 + C[2, 1] * b1 + C[2, 2] * b2
+        if first_row < 6:
+            ca0 = C[0, 0] * b0 + C[0, 1] * b1 + C[0, 2] * b2
+            ca1 = C[1, 0] * b0 + C[1, 1] * b1 + C[1, 2] * b2
+            ca2 = C[2, 0] * b0 + C[2, 1] * b1 + C[2, 2] * b2
         cg0 = C[0, 0] * g0 + C[0, 1] * g1 + C[0, 2] * g2
         cg1 = C[1, 0] * g0 + C[1, 1] * g1 + C[1, 2] * g2
         cg2 = C[2, 0] * g0 + C[2, 1] * g1 + C[2, 2] * g2
     if inverse:  # solve by back substitution: attitude, then velocity with it, then position with that
         t0, t1, t2 = t0 - s * cg0, t1 - s * cg1, t2 - s * cg2
-    n0 = v0 - s * ((a[1] * t2 - a[2] * t1) + ca0)
-    n1 = v1 - s * ((a[2] * t0 - a[0] * t2) + ca1)
-    n2 = v2 - s * ((a[0] * t1 - a[1] * t0) + ca2)
-    if inverse:
-        X[0, j], X[1, j], X[2, j] = p0 + s * n0, p1 + s * n1, p2 + s * n2
-    else:
-        X[0, j], X[1, j], X[2, j] = p0 + s * v0, p1 + s * v1, p2 + s * v2
+    if first_row < 6:
+        n0 = v0 - s * ((a[1] * t2 - a[2] * t1) + ca0)
+        n1 = v1 - s * ((a[2] * t0 - a[0] * t2) + ca1)
+        n2 = v2 - s * ((a[0] * t1 - a[1] * t0) + ca2)
+        if first_row == 0:
+            if inverse:
+                X[0, j], X[1, j], X[2, j] = p0 + s * n0, p1 + s * n1, p2 + s * n2
+            else:
+                X[0, j], X[1, j], X[2, j] = p0 + s * v0, p1 + s * v1, p2 + s * v2
+        X[3, j], X[4, j], X[5, j] = n0, n1, n2
+    if not inverse:
         t0, t1, t2 = t0 - s * cg0, t1 - s * cg1, t2 - s * cg2
-    X[3, j], X[4, j], X[5, j] = n0, n1, n2
     X[6, j], X[7, j], X[8, j] = t0, t1, t2
 
 
@@ -70,7 +75,7 @@ def transition_rows(X, n, ncols, h, a, C, f, inverse):
     in the body frame, all at the start of the interval.
     """
     for j in range(ncols):
-        _transition_column(X, n, j, h, a, C, f, inverse)
+        _transition_column(X, n, j, h, a, C, f, inverse, 0)
 
 
 @njit(cache=True)
@@ -100,8 +105,8 @@ def propagate(P, n, h, a, C, f, noise_power):
     """P <- Phi P Phi^T + Q in place over one interval of h seconds; Q = diag(noise_power) h.
 
     Phi acts on the columns of P (block rows 0:9 change), then on the rows of the result: by symmetry only
-    the 9 x 9 block of position, velocity and attitude needs it, and the block rows 9:n of the result are the
-    transpose of the block columns already computed.
+    the lower triangle of the 9 x 9 block of position, velocity and attitude needs it (mirrored after), and the
+    block rows 9:n of the result are the transpose of the block columns already computed.
     """
     transition_rows(P, n, n, h, a, C, f, False)  # P <- Phi P: rows 0:9 change
     for i in range(9):  # (Phi P)^T into the first 9 columns (rows 9: of Phi P are P's, unchanged)
@@ -109,7 +114,13 @@ def propagate(P, n, h, a, C, f, noise_power):
             P[i, j], P[j, i] = P[j, i], P[i, j]
         for j in range(9, n):
             P[j, i] = P[i, j]
-    transition_rows(P, n, 9, h, a, C, f, False)  # columns 0:9 <- Phi (Phi P)^T = (Phi P Phi^T)[:, 0:9]
+    # columns 0:9 <- Phi (Phi P)^T = (Phi P Phi^T)[:, 0:9], their lower triangle (block rows from the column's)
+    for j in range(3):
+        _transition_column(P, n, j, h, a, C, f, False, 0)
+    for j in range(3, 6):
+        _transition_column(P, n, j, h, a, C, f, False, 3)
+    for j in range(6, 9):
+        _transition_column(P, n, j, h, a, C, f, False, 6)
     for i in range(9):
         for j in range(i + 1, 9):
             P[i, j] = P[j, i]
@@ -119,8 +130,8 @@ def propagate(P, n, h, a, C, f, noise_power):
 
 @njit(cache=True)
 def update_buffers(n):
-    """Work buffers of :func:`joseph_update`: U, V, W (n, 3), HU, S^-1 (3, 3)."""
-    return np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)), np.empty((3, 3))
+    """Work buffers of :func:`joseph_update`: U, V, W (n, 3), HU, S^-1 (3, 3) and those of the inverse."""
+    return np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)), np.empty((3, 3)), inverse_buffers()
 
 
 @njit(cache=True)
@@ -134,7 +145,7 @@ def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, w):
     Writes the correction ``K z`` into ``dx``, the gain into ``K`` (n, 3) and ``S^-1 z`` into ``s`` (3,);
     ``w`` holds :func:`update_buffers`. Returns False (P untouched) if S is not positive definite.
     """
-    U, V, W, HU, S_inv = w
+    U, V, W, HU, S_inv, inverse_work = w
     U[:, :] = 0.0
     for r in range(m):
         for e in range(h_cnt[r]):
@@ -147,7 +158,7 @@ def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, w):
             c, value = h_col[r, e], h_val[r, e]
             for q in range(3):
                 HU[r, q] += value * U[c, q]
-    if not spd_inverse(HU, r_var, m, S_inv):
+    if not spd_inverse(HU, r_var, m, S_inv, inverse_work):
         return False
     for r in range(3):
         acc = 0.0

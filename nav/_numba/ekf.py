@@ -59,16 +59,18 @@ def initial_covariance_and_noise(n, cfg):
 
 @njit(cache=True)
 def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
-    """Write the nominal state into row k of the outputs."""
+    """Write the nominal state into row k of the outputs (the estimates into their only row when they keep the
+    final sample's alone: see :func:`filter_run`)."""
+    e = min(k, bias_acc.shape[0] - 1)
     for i in range(4):
         quat[k, i] = q[i]
     for i in range(3):
         vel[k, i] = v[i]
         pos[k, i] = p[i]
-        bias_acc[k, i] = ba[i]
-        bias_gyr[k, i] = bg[i]
+        bias_acc[e, i] = ba[i]
+        bias_gyr[e, i] = bg[i]
     for i in range(9):
-        gsens[k, i] = G[i]
+        gsens[e, i] = G[i]
 
 
 @njit(cache=True)
@@ -129,7 +131,8 @@ def filter_run(mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
 
     Outputs (filled in place; rows before i0 NaN): quat (N,4), vel (N,3), pos (N,3), bias_acc (N,3),
     bias_gyr (N,3), gsens (N,9), p_diag (N,n) -- a posteriori at each sample, or smoothed when ``rts`` (state
-    only; p_diag stays filtered). Returns the number of measurement updates skipped because the innovation
+    only; p_diag stays filtered). The estimates bias_acc, bias_gyr, gsens and p_diag may instead have one row:
+    it receives every sample in turn and holds the last one's (not with ``rts``, which reads them back). Returns the number of measurement updates skipped because the innovation
     covariance was not positive definite.
 
     The state count is a constant in each branch: the compiler unrolls and vectorises the block loops for it.
@@ -153,10 +156,11 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
         quat[k] = np.nan
         vel[k] = np.nan
         pos[k] = np.nan
-        bias_acc[k] = np.nan
-        bias_gyr[k] = np.nan
-        gsens[k] = np.nan
-        p_diag[k] = np.nan
+        if p_diag.shape[0] == n_samples:
+            bias_acc[k] = np.nan
+            bias_gyr[k] = np.nan
+            gsens[k] = np.nan
+            p_diag[k] = np.nan
     q = q0.copy()
     v = v0.copy()
     p = p0.copy()
@@ -241,7 +245,7 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
 
         _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
         for i in range(n):
-            p_diag[k, i] = P[i, i]
+            p_diag[min(k, p_diag.shape[0] - 1), i] = P[i, i]
         if k == n_samples - 1:
             break
 

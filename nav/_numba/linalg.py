@@ -26,40 +26,45 @@ def cholesky_factor(A, m, L):
 
 
 @njit(cache=True)
-def cholesky_solve(L, m, b, out):
-    """Solve L L^T x = b into out, given the factor L from :func:`cholesky_factor`."""
+def cholesky_solve(L, m, B, X):
+    """Solve L L^T X = B for the m columns of B (m x m) into X, given the factor L from :func:`cholesky_factor`.
+
+    The columns are solved side by side, so that their divisions overlap; each column sees the operations of a
+    solve on its own, in the same order.
+    """
     for i in range(m):
-        s = b[i]
-        for k in range(i):
-            s -= L[i, k] * out[k]
-        out[i] = s / L[i, i]
+        for c in range(m):
+            s = B[i, c]
+            for k in range(i):
+                s -= L[i, k] * X[k, c]
+            X[i, c] = s / L[i, i]
     for i in range(m - 1, -1, -1):
-        s = out[i]
-        for k in range(i + 1, m):
-            s -= L[k, i] * out[k]
-        out[i] = s / L[i, i]
+        for c in range(m):
+            s = X[i, c]
+            for k in range(i + 1, m):
+                s -= L[k, i] * X[k, c]
+            X[i, c] = s / L[i, i]
 
 
 @njit(cache=True)
-def spd_inverse(A, diag, m, out):
+def inverse_buffers():
+    """Work buffers of :func:`spd_inverse` (allocated once per run, not per update): S, L and the identity (3, 3)."""
+    return np.empty((3, 3)), np.empty((3, 3)), np.eye(3)
+
+
+@njit(cache=True)
+def spd_inverse(A, diag, m, out, work):
     """out (3, 3) = (A + diag(diag))^-1 for the leading m x m block (m <= 3), zero elsewhere, from its Cholesky
-    factor; returns False if that block is not positive definite."""
-    S = np.empty((3, 3))
-    L = np.zeros((3, 3))
+    factor; returns False if that block is not positive definite. ``work`` holds :func:`inverse_buffers`."""
+    S, L, identity = work
+    L[:, :] = 0.0
     for i in range(m):
         for j in range(m):
             S[i, j] = A[i, j] + (diag[i] if i == j else 0.0)
     if not cholesky_factor(S, m, L):
         return False
-    e = np.empty(3)
-    col = np.empty(3)
     out[:, :] = 0.0
-    for c in range(m):
-        for i in range(m):
-            e[i] = 1.0 if i == c else 0.0
-        cholesky_solve(L, m, e, col)
-        for i in range(m):
-            out[i, c] = col[i]
+    cholesky_solve(L, m, identity, out)
     for i in range(m):  # exactly symmetric
         for j in range(i + 1, m):
             value = 0.5 * (out[i, j] + out[j, i])
