@@ -13,12 +13,18 @@ The magnitude compared is the library's equivalent figure (``expected``): a gyro
 ``accel_gyro_skew`` of -tau (the library's skew samples the gyro later); a first-order low-pass is named by its
 -3 dB frequency (either library low-pass); a mount rotation about z is ``mount_yaw``. The bias ramp is outside
 the library: the loop must leave it unexplained.
+
+The same injections also go into shared measured recordings (:data:`MEASURED`: x-io's short walk, a walker the
+stance model was never fitted to, and gaitmap's right foot: real feet the twin reproduces only in part, with their
+own sensors' errors), for the effects a real recording's loop can be asked to see (:data:`MEASURED_CASES`), and
+are judged the same way against that recording's untouched run (the loop's default rounds).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -26,12 +32,14 @@ import numpy as np
 
 from nav.recording import Recording
 
+from ..measured import load_dataset
 from ..measured.reference import as_measured
 from ..scenario import scenario_from_dict
 from ..simulate import simulate_walk
 from . import attribution, settings
 
 SENSORS = ("paper-vn200", "bmi160")
+MEASURED = ("xio-ngimu/short_walk", "gaitmap-healthy/right")  # dataset/recording of the shared data
 
 
 def gyro_delay(t, acc, gyr, ms):
@@ -103,29 +111,44 @@ CASES = (
     BlindCase("gyro_bias_ramp", gyro_bias_ramp, 0.5, "deg/s", ("unexplained",), math.nan),
 )
 BY_NAME = {c.name: c for c in CASES}
+MEASURED_CASES = tuple(BY_NAME[name] for name in ("gyro_delay", "gyro_scale_y", "mount_yaw"))
 
 
-@lru_cache(maxsize=len(SENSORS))
-def base_recording(sensor: str, seed: int = settings.BLIND_SEED) -> Recording:
-    """The untouched measured-like recording of ``sensor`` (module docstring)."""
+def cases(source: str) -> tuple[BlindCase, ...]:
+    """The cases run on ``source``: every case on a simulated sensor, :data:`MEASURED_CASES` on a recording."""
+    return MEASURED_CASES if source in MEASURED else CASES
+
+
+@lru_cache(maxsize=len(SENSORS) + len(MEASURED))
+def base_recording(source: str, seed: int = settings.BLIND_SEED) -> Recording:
+    """The untouched recording of ``source``: a simulated sensor's measured-like walk (module docstring), or
+    a shared measured recording (``dataset/recording`` of :data:`MEASURED`, from the default data folder)."""
+    if source in MEASURED:
+        dataset, name = source.split("/")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the loader's data-quality counts are in the recording's meta
+            return {r.meta["recording"]: r for r in load_dataset(dataset)}[name]
+    sensor = source
     doc = {"path": {"kind": "straight", "length_m": settings.BLIND_WALK_LENGTH_M},
            "sampling": {"rate_hz": settings.BLIND_RATE_HZ}, "sensor": {"preset": sensor, "withhold": True}}
     return as_measured(simulate_walk(scenario_from_dict(doc, f"<blind {sensor}>"), seed=seed),
                        settings.BLIND_REFERENCE_RATE_HZ)
 
 
-def blind_recording(sensor: str, case: BlindCase | None) -> Recording:
-    """The base recording of ``sensor`` with ``case``'s effect injected (untouched for None)."""
-    rec = base_recording(sensor)
+def blind_recording(source: str, case: BlindCase | None) -> Recording:
+    """The base recording of ``source`` with ``case``'s effect injected (untouched for None)."""
+    rec = base_recording(source)
     if case is None:
         return rec
     acc, gyr = case.inject(rec.t, rec.acc.copy(), rec.gyr.copy(), case.magnitude)
     return dataclasses.replace(rec, acc=np.asarray(acc, float), gyr=np.asarray(gyr, float))
 
 
-def run(sensor: str, case: BlindCase | None) -> attribution.LoopResult:
-    """The loop on the blind recording (``settings.BLIND_ROUNDS`` rounds)."""
-    return attribution.run_loop(blind_recording(sensor, case), max_rounds=settings.BLIND_ROUNDS)
+def run(source: str, case: BlindCase | None) -> attribution.LoopResult:
+    """The loop on the blind recording (``settings.BLIND_ROUNDS`` rounds on a simulated sensor's walk, the
+    loop's default on a measured recording)."""
+    rounds = settings.MAX_ROUNDS if source in MEASURED else settings.BLIND_ROUNDS
+    return attribution.run_loop(blind_recording(source, case), max_rounds=rounds)
 
 
 def named_effects(result: attribution.LoopResult) -> dict:

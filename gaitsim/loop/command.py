@@ -122,24 +122,27 @@ def _run_held_out(dataset: str, folder: Path, results: dict) -> list[str]:
 
 
 def _run_blind(folder: Path) -> list[str]:
-    """The blind table (:mod:`gaitsim.loop.blind`) of every sensor into ``folder``/blind.md and blind.json."""
+    """The blind table (:mod:`gaitsim.loop.blind`) of every simulated sensor and measured recording into
+    ``folder``/blind.md and blind.json."""
     rows, summary = [], []
-    for sensor in blind.SENSORS:
-        untouched = blind.run(sensor, None)
-        print(f"blind {sensor} untouched: {blind.named_effects(untouched)}", flush=True)
+    for source in blind.SENSORS + blind.MEASURED:
+        untouched = blind.run(source, None)
+        print(f"blind {source} untouched: {blind.named_effects(untouched)}", flush=True)
         found = []
-        for case in blind.CASES:
-            row = {"sensor": sensor, "untouched_named": blind.named_effects(untouched),
-                   **blind.verdict(case, blind.run(sensor, case), untouched)}
+        for case in blind.cases(source):
+            row = {"sensor": source, "untouched_named": blind.named_effects(untouched),
+                   **blind.verdict(case, blind.run(source, case), untouched)}
             rows.append(row)
             found.append(row["found"])
-            print(f"blind {sensor} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
-        inside = [f for f, c in zip(found, blind.CASES) if c.named != ("unexplained",)]
-        summary.append(f"{sensor}: {sum(inside)} of {len(inside)} library effects named within "
-                       f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}; outside effect unexplained: {found[-1]}")
+            print(f"blind {source} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
+        inside = [f for f, c in zip(found, blind.cases(source)) if c.named != ("unexplained",)]
+        outside = [f for f, c in zip(found, blind.cases(source)) if c.named == ("unexplained",)]
+        summary.append(f"{source}: {sum(inside)} of {len(inside)} library effects named within "
+                       f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}" +
+                       (f"; outside effect unexplained: {outside[0]}" if outside else ""))
     write_json(folder / "blind.json", rows)
     lines = ["# Blind tests", "", blind.__doc__.strip(), ""] + [f"- {line}" for line in summary] + [
-        "", "| sensor | case | injected | expected | named beyond the untouched recording | found |",
+        "", "| recording | case | injected | expected | named beyond the untouched recording | found |",
         "|---|---|---|---|---|---|"]
     for r in rows:
         named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
@@ -147,8 +150,9 @@ def _run_blind(folder: Path) -> list[str]:
             named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
         lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
                      f"{shown(r['expected_magnitude'])} | {named} | {'yes' if r['found'] else 'no'} |")
+    untouched_named = {r["sensor"]: r["untouched_named"] for r in rows}
     lines += ["", "Named on the untouched recordings (subtracted): " + "; ".join(
-        f"{s}: {rows[i * len(blind.CASES)]['untouched_named']}" for i, s in enumerate(blind.SENSORS))]
+        f"{s}: {named}" for s, named in untouched_named.items())]
     (folder / "blind.md").write_text("\n".join(lines) + "\n")
     return [f"| [blind tests](blind.md) | {'; '.join(summary)} | | |"]
 
