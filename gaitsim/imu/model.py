@@ -30,7 +30,8 @@ default value):
    coarse step ``h`` (16 samples, or ``tau_c / 20`` if shorter) and linearly interpolated to the samples;
    their spectra differ from the continuous processes only above ``1 / (2 h)``, where white noise
    dominates by orders of magnitude.
-   **White noise**: sample std ``N sqrt(fs)`` (noise density N), from float32 standard normals.
+   **White noise**: sample std ``N sqrt(fs)`` (noise density N), from float32 standard normals (numpy's,
+   drawn in a compiled loop: :mod:`gaitsim.imu.normals`).
 6. **Bandwidth**: a Butterworth low-pass of order ``filter_order`` and cutoff ``*_bandwidth`` (digital,
    bilinear, at the output rate) acting on the sum above, started in steady state on the first sample so a
    static start has no transient.
@@ -52,6 +53,7 @@ from numba import njit
 
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
+from gaitsim.imu.normals import add_white_noise
 from gaitsim.imu.units import si_unit
 from nav import quaternion
 from nav.calibration import Calibration
@@ -229,30 +231,6 @@ def _first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -
         for c in range(3):
             nodes[j + 1, c] = decay * nodes[j, c] + steps[j, c]
     return nodes
-
-
-@njit(cache=True)
-def _add_scaled(out: np.ndarray, draws: np.ndarray, scale: np.ndarray) -> None:
-    """out[k, c] += draws[k, c] * scale[c] (no temporary array)."""
-    for k in range(out.shape[0]):
-        for c in range(3):
-            out[k, c] += draws[k, c] * scale[c]
-
-
-WHITE_NOISE_CHUNK = 32768  # samples per block of white-noise draws (a cache-sized, reused buffer)
-
-
-def add_white_noise(out: np.ndarray, sample_std: np.ndarray, rng: np.random.Generator) -> None:
-    """Add white noise of per-axis sample std ``sample_std`` (3,) to ``out`` (n, 3) in place.
-
-    Draws are float32 standard normals (24-bit resolution, ample for noise), taken in blocks into one
-    reused buffer; the sequence is the same as one ``rng.standard_normal((n, 3), dtype=float32)`` call.
-    """
-    buffer = np.empty((min(WHITE_NOISE_CHUNK, out.shape[0]), 3), dtype=np.float32)
-    for start in range(0, out.shape[0], WHITE_NOISE_CHUNK):
-        block = buffer[: min(WHITE_NOISE_CHUNK, out.shape[0] - start)]
-        rng.standard_normal(out=block, dtype=np.float32)
-        _add_scaled(out[start:start + block.shape[0]], block, sample_std)
 
 
 def _node_count(n: int, node_step: int) -> int:
