@@ -34,7 +34,7 @@ def everything_on():
         clock_error=50e-6, timestamp_jitter=1e-6, accel_gyro_skew=2e-4, mounting_misalignment=[0.01, -0.02, 0.03])
 
 
-def samples_per_second(spec, t, acc, gyr, repeats: int = 5) -> float:
+def samples_per_second(spec, t, acc, gyr, repeats: int = 9) -> float:
     apply_sensor(spec, t[:1000], acc[:1000], gyr[:1000], np.random.default_rng(0))  # compile numba kernels
     best = np.inf
     for seed in range(repeats):

@@ -83,6 +83,17 @@ def test_quantisation_step_equals_resolution():
     assert np.max(np.abs(acc_m - acc)) <= resolution / 2 + 1e-12
 
 
+def test_quantisation_and_clipping_are_numpys_round_and_clip_exactly():
+    """The compiled pass rounds halves to even and clips as np.round and np.clip do, bit for bit."""
+    resolution, limit = 0.0625, 2.0  # exact binary steps: k + 1/2 steps are exact halves
+    halves = (np.arange(-80, 80) + 0.5) * resolution
+    values = np.concatenate([halves, np.random.default_rng(3).uniform(-3.0, 3.0, 3 * 2000 - halves.size)])
+    acc = values.reshape(-1, 3)
+    t = np.arange(acc.shape[0]) / RATE
+    _, acc_m, _ = run(only(accel_resolution=resolution, accel_range=limit), t, acc, np.zeros_like(acc))
+    assert np.array_equal(acc_m, np.clip(np.round(acc / resolution) * resolution, -limit, limit))
+
+
 def test_saturation_clips_exactly_at_range():
     t = np.arange(2000) / RATE
     ramp = np.linspace(-40.0, 40.0, t.size)

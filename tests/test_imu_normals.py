@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from gaitsim.imu.normals import ziggurat_tables, add_white_noise
+from gaitsim.imu.normals import add_white_noise, ziggurat_tables
 
 BIT_GENERATORS = (np.random.PCG64, np.random.PCG64DXSM, np.random.SFC64, np.random.Philox, np.random.MT19937)
 BOUND, WIDTH, DENSITY = ziggurat_tables()

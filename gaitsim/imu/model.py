@@ -53,7 +53,7 @@ from numba import njit
 
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
-from gaitsim.imu.normals import add_white_noise
+from gaitsim.imu.normals import bit_words, standard_normal
 from gaitsim.imu.units import si_unit
 from nav import quaternion
 from nav.calibration import Calibration
@@ -211,14 +211,70 @@ def _gauss_markov_std_per_instability() -> float:
 # ---------------------------------------------------------------------------------------------- pieces
 
 
+@njit(cache=True, inline="always")
+def _quantised(value, resolution, limit):
+    """``value`` rounded to a multiple of ``resolution`` (0: off; halves to even, like np.round), then
+    clipped at +-``limit`` (inf: off)."""
+    if resolution > 0:
+        value = np.round(value / resolution) * resolution
+    return min(max(value, -limit), limit)
+
+
+STOCHASTIC_BLOCK = 4096  # samples summed at a time in a cache-resident buffer
+
+
 @njit(cache=True)
-def _add_interpolated(out: np.ndarray, nodes: np.ndarray, node_step: int) -> None:
-    """out[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at sample k."""
-    for k in range(out.shape[0]):
-        j = k // node_step
-        frac = (k - j * node_step) / node_step
+def _add_interpolated(block, nodes, node_step, node, offset):
+    """block[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at the samples of
+    the block, the first of which lies ``offset`` samples after node ``node``; returns (node, offset) of the
+    sample after the block."""
+    for k in range(block.shape[0]):
+        frac = offset / node_step
         for c in range(3):
-            out[k, c] += nodes[j, c] + frac * (nodes[j + 1, c] - nodes[j, c])
+            before = nodes[node, c]
+            block[k, c] += before + frac * (nodes[node + 1, c] - before)
+        offset += 1
+        if offset == node_step:
+            node, offset = node + 1, 0
+    return node, offset
+
+
+@njit(cache=True)
+def _add_stochastic(out, signal, instability_nodes, instability_step, walk_nodes, walk_step, white_std,
+                    next_uint32, state, resolution, limit):
+    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each linearly
+    interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white noise of std
+    ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and ``limit``
+    inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it; the
+    terms are added a block at a time in a cache-resident buffer, each in its own simple loop."""
+    white = white_std[0] != 0.0 or white_std[1] != 0.0 or white_std[2] != 0.0
+    finish = resolution > 0.0 or limit < np.inf
+    buffer = np.empty((STOCHASTIC_BLOCK, 3))
+    instability_at = walk_at = (0, 0)  # (node before the block's first sample, its offset from that node)
+    for start in range(0, out.shape[0], STOCHASTIC_BLOCK):
+        stop = min(out.shape[0], start + STOCHASTIC_BLOCK)
+        block = buffer[: stop - start]
+        block[:] = signal[start:stop]
+        if instability_nodes.shape[0]:
+            instability_at = _add_interpolated(block, instability_nodes, instability_step, *instability_at)
+        if walk_nodes.shape[0]:
+            walk_at = _add_interpolated(block, walk_nodes, walk_step, *walk_at)
+        if white:
+            for k in range(block.shape[0]):
+                for c in range(3):
+                    block[k, c] += float(standard_normal(next_uint32, state)) * white_std[c]
+        if finish:
+            for k in range(block.shape[0]):
+                for c in range(3):
+                    block[k, c] = _quantised(block[k, c], resolution, limit)
+        out[start:stop] = block
+
+
+@njit(cache=True)
+def _quantise_and_clip(x, resolution, limit):
+    for k in range(x.shape[0]):
+        for c in range(3):
+            x[k, c] = _quantised(x[k, c], resolution, limit)
 
 
 @njit(cache=True)
@@ -238,36 +294,42 @@ def _node_count(n: int, node_step: int) -> int:
     return (n - 1) // node_step + 2
 
 
-def add_gauss_markov_bias(out: np.ndarray, dt: float, instability: np.ndarray, tau_c: float,
-                          rng: np.random.Generator) -> None:
-    """Add a bias-instability process to ``out`` (n, 3) in place: first-order Gauss-Markov, stationary from
-    the start, simulated exactly on nodes and linearly interpolated (module docstring, step 5).
+def gauss_markov_nodes(n: int, dt: float, instability: np.ndarray, tau_c: float,
+                       rng: np.random.Generator) -> tuple[np.ndarray, int]:
+    """Nodes of a bias-instability process for n samples: first-order Gauss-Markov, stationary from the
+    start, simulated exactly at every ``node_step``-th sample (module docstring, step 5).
 
     Parameters
     ----------
-    out : (n, 3) signal, unit of ``instability``.
+    n : samples to cover.
     dt : sample interval, s.
-    instability : (3,) datasheet bias instability B.
+    instability : (3,) datasheet bias instability B (signal unit).
     tau_c : correlation time, s.
     rng : the term's own Generator.
+
+    Returns
+    -------
+    nodes : (J, 3) process values at samples 0, node_step, 2 node_step, ... (J >= (n - 1) // node_step + 2).
+    node_step : samples between nodes.
     """
     node_step = int(max(1, min(SLOW_PROCESS_STEP, np.floor(tau_c / (20.0 * dt)))))
     sigma = _gauss_markov_std_per_instability() * np.asarray(instability)
     decay = np.exp(-node_step * dt / tau_c)
-    draws = rng.standard_normal((_node_count(out.shape[0], node_step), 3))
+    draws = rng.standard_normal((_node_count(n, node_step), 3))
     first = draws[0] * sigma
     steps = draws[1:] * (sigma * np.sqrt(1.0 - decay**2))
-    nodes = _first_order_recursion(first, steps, decay)
-    _add_interpolated(out, nodes, node_step)
+    return _first_order_recursion(first, steps, decay), node_step
 
 
-def add_random_walk_bias(out: np.ndarray, dt: float, walk: np.ndarray, rng: np.random.Generator) -> None:
-    """Add a rate-random-walk bias starting at zero to ``out`` (n, 3) in place; ``walk`` (3,) is K in
-    (signal unit)/sqrt(s); simulated exactly on nodes and linearly interpolated."""
+def random_walk_nodes(n: int, dt: float, walk: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, int]:
+    """Nodes (J, 3) and node step of a rate-random-walk bias starting at zero, for n samples; ``walk`` (3,)
+    is K in (signal unit)/sqrt(s); simulated exactly at the nodes (see :func:`gauss_markov_nodes`)."""
     node_step = SLOW_PROCESS_STEP
-    steps = rng.standard_normal((_node_count(out.shape[0], node_step) - 1, 3)) * (np.asarray(walk) * np.sqrt(node_step * dt))
-    nodes = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
-    _add_interpolated(out, nodes, node_step)
+    steps = rng.standard_normal((_node_count(n, node_step) - 1, 3)) * (np.asarray(walk) * np.sqrt(node_step * dt))
+    return np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)]), node_step
+
+
+_NO_NODES = (np.zeros((0, 3)), 1)  # a slow process that is off
 
 
 def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
@@ -282,17 +344,6 @@ def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.
     sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
     zi = sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
     return sosfilt(sos, x, axis=0, zi=zi)[0]
-
-
-def quantise_and_clip(x: np.ndarray, resolution: float, limit: float) -> np.ndarray:
-    """Round to multiples of ``resolution`` (0: off), then clip at ``+-limit`` (inf: off); in place."""
-    if resolution > 0:
-        np.divide(x, resolution, out=x)
-        np.round(x, out=x)
-        np.multiply(x, resolution, out=x)
-    if np.isfinite(limit):
-        np.clip(x, -limit, limit, out=x)
-    return x
 
 
 def mounting_rotation(roll_pitch_yaw: np.ndarray) -> np.ndarray:
@@ -386,7 +437,7 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
                if np.any(p[f"{s}_bias_repeatability"]) else np.zeros(3) for s in ("accel", "gyro")}
     deterministic = spec.deterministic(turn_on["accel"], turn_on["gyro"])
     if _is_identity(deterministic):
-        acc_m, gyr_m = acc.copy(), gyr.copy()
+        acc_m, gyr_m = acc, gyr  # not copied: step 5 writes the output arrays (a pass over memory saved)
     else:
         acc_m, gyr_m = deterministic.distort(acc, gyr)
 
@@ -394,23 +445,37 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
     scale_on = np.any(p["accel_temp_scale"]) or np.any(p["gyro_temp_scale"])
     bias_on = np.any(p["accel_temp_bias"]) or np.any(p["gyro_temp_bias"])
     if scale_on or bias_on:
+        if acc_m is acc:
+            acc_m, gyr_m = acc.copy(), gyr.copy()
         delta = (_temperature_at(spec, temperature, t, instants) - p["temperature_ref"])[:, None]
         for out, bias, s in ((acc_m, deterministic.b_a, "accel"), (gyr_m, deterministic.b_g, "gyro")):
             out += (out - bias) * (p[f"{s}_temp_scale"] * delta) + p[f"{s}_temp_bias"] * delta
 
-    # 5.-7. stochastic terms, bandwidth, quantisation and saturation
-    for out, s in ((acc_m, "accel"), (gyr_m, "gyro")):
+    # 5.-7. stochastic terms, bandwidth, quantisation and saturation: one pass unless a bandwidth is on
+    measured = []
+    for signal, s in ((acc_m, "accel"), (gyr_m, "gyro")):
+        instability, walk = _NO_NODES, _NO_NODES
         if np.any(p[f"{s}_bias_instability"]):
-            add_gauss_markov_bias(out, dt, p[f"{s}_bias_instability"], float(p[f"{s}_bias_instability_tau"]),
-                                  streams[f"{s}_instability"])
+            instability = gauss_markov_nodes(n, dt, p[f"{s}_bias_instability"],
+                                             float(p[f"{s}_bias_instability_tau"]), streams[f"{s}_instability"])
         if np.any(p[f"{s}_random_walk"]):
-            add_random_walk_bias(out, dt, p[f"{s}_random_walk"], streams[f"{s}_random_walk"])
-        if np.any(p[f"{s}_noise_density"]):
-            add_white_noise(out, np.asarray(p[f"{s}_noise_density"] * np.sqrt(rate_hz)), streams[f"{s}_white"])
-    if np.isfinite(p["accel_bandwidth"]):
-        acc_m = low_pass(acc_m, float(p["accel_bandwidth"]), rate_hz, spec.filter_order)
-    if np.isfinite(p["gyro_bandwidth"]):
-        gyr_m = low_pass(gyr_m, float(p["gyro_bandwidth"]), rate_hz, spec.filter_order)
-    quantise_and_clip(acc_m, float(p["accel_resolution"]), float(p["accel_range"]))
-    quantise_and_clip(gyr_m, float(p["gyro_resolution"]), float(p["gyro_range"]))
+            walk = random_walk_nodes(n, dt, p[f"{s}_random_walk"], streams[f"{s}_random_walk"])
+        white_std = np.asarray(p[f"{s}_noise_density"] * np.sqrt(rate_hz))
+        bandwidth, resolution, limit = (float(p[f"{s}_{name}"]) for name in ("bandwidth", "resolution", "range"))
+        filtered = np.isfinite(bandwidth)
+        resolution_now, limit_now = (0.0, np.inf) if filtered else (resolution, limit)  # else after the filter
+        out = np.empty_like(signal) if signal is acc or signal is gyr else signal  # never write the inputs
+        if instability is _NO_NODES and walk is _NO_NODES and not np.any(white_std) and not resolution_now and \
+                limit_now == np.inf:
+            if out is not signal:
+                out[:] = signal  # nothing to add (numpy's copy is faster than the pass below)
+        else:
+            with bit_words(streams[f"{s}_white"]) as (next_uint32, state):
+                _add_stochastic(out, signal, *instability, *walk, white_std, next_uint32, state, resolution_now,
+                                limit_now)
+        if filtered:
+            out = low_pass(out, bandwidth, rate_hz, spec.filter_order)
+            _quantise_and_clip(out, resolution, limit)
+        measured.append(out)
+    acc_m, gyr_m = measured
     return t_meas, acc_m, gyr_m

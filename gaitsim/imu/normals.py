@@ -18,6 +18,7 @@ tail start ``r`` and layer area ``v`` numpy uses.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 
 import numpy as np
 from numba import njit
@@ -46,72 +47,81 @@ def ziggurat_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.round(bound).astype(np.uint32), width.astype(np.float32), density.astype(np.float32)
 
 
-_BOUND, _WIDTH, _DENSITY = ziggurat_tables()
-_TAIL_START_F32 = np.float32(TAIL_START)
-_INVERSE_TAIL_START_F32 = np.float32(1.0 / TAIL_START)
-_UNIFORM_STEP_F32 = np.float32(1.0 / 16777216.0)  # 2**-24: a float32 uniform from the top 24 bits of a word
+_BOUND, _WIDTH, _DENSITY = ziggurat_tables()  # compiled in as constants
+_TAIL_START = np.float32(TAIL_START)
+_INVERSE_TAIL_START = np.float32(1.0 / TAIL_START)
+_UNIFORM_STEP = np.float32(1.0 / 16777216.0)  # 2**-24: a float32 uniform from the top 24 bits of a word
 
 
 @njit(cache=True, inline="always")
-def _layer_draw(word, width):
+def _layer_draw(word):
     """(layer, magnitude, x) of one 32-bit word: x = +-magnitude * width[layer] in float32."""
     layer = word & np.uint32(0xFF)
     magnitude = word >> np.uint32(9)
     # the sign as a factor of +-1 (exact): a branch on a random bit costs more than the whole draw
     sign = np.float32(1.0) - np.float32(2.0) * np.float32((word >> np.uint32(8)) & np.uint32(1))
-    return layer, magnitude, np.float32(magnitude) * width[layer] * sign
+    return layer, magnitude, np.float32(magnitude) * _WIDTH[layer] * sign
 
 
 @njit(cache=True, inline="always")
-def _uniform(next_uint32, state, uniform_step):
+def _uniform(next_uint32, state):
     """A float32 uniform in [0, 1) from the top 24 bits of the next 32-bit word."""
-    return np.float32(next_uint32(state) >> np.uint32(8)) * uniform_step
+    return np.float32(next_uint32(state) >> np.uint32(8)) * _UNIFORM_STEP
 
 
 @njit(cache=True)
-def _rejected(next_uint32, state, layer, magnitude, x, bound, width, density, tail_start, inverse_tail_start,
-              uniform_step):
+def _rejected(next_uint32, state, layer, magnitude, x):
     """The normal whose first draw (layer, magnitude, x) fell outside its layer's rectangle: the wedge or
     tail test, then new draws until one is accepted."""
     while True:
         if layer == 0:  # the tail beyond r, by Marsaglia's exponential method (with this draw's sign)
             sign = np.float32(1.0) - np.float32(2.0) * np.float32((magnitude >> np.uint32(8)) & np.uint32(1))
             while True:
-                excess = -inverse_tail_start * np.float32(math.log1p(-_uniform(next_uint32, state, uniform_step)))
-                exponential = -np.float32(math.log1p(-_uniform(next_uint32, state, uniform_step)))
+                excess = -_INVERSE_TAIL_START * np.float32(math.log1p(-_uniform(next_uint32, state)))
+                exponential = -np.float32(math.log1p(-_uniform(next_uint32, state)))
                 if exponential + exponential > excess * excess:
-                    return (tail_start + excess) * sign
-        u = _uniform(next_uint32, state, uniform_step)  # the wedge of the layer
-        if (density[layer - 1] - density[layer]) * u + density[layer] < math.exp(-0.5 * float(x) * float(x)):
+                    return (_TAIL_START + excess) * sign
+        u = _uniform(next_uint32, state)  # the wedge of the layer
+        if (_DENSITY[layer - 1] - _DENSITY[layer]) * u + _DENSITY[layer] < math.exp(-0.5 * float(x) * float(x)):
             return x
-        layer, magnitude, x = _layer_draw(next_uint32(state), width)
-        if magnitude < bound[layer]:
+        layer, magnitude, x = _layer_draw(next_uint32(state))
+        if magnitude < _BOUND[layer]:
             return x
+
+
+@njit(cache=True, inline="always")
+def standard_normal(next_uint32, state):
+    """One float32 standard normal from the 32-bit words ``next_uint32(state)`` of a numpy bit generator
+    (compiled code only; see :func:`bit_words`)."""
+    layer, magnitude, x = _layer_draw(next_uint32(state))
+    if magnitude >= _BOUND[layer]:  # about 1 % of draws
+        x = _rejected(next_uint32, state, layer, magnitude, x)
+    return x
 
 
 @njit(cache=True)
-def _add_scaled_normals(out, scale, next_uint32, state, bound, width, density, tail_start, inverse_tail_start,
-                        uniform_step):
-    """out[k, c] += normal * scale[c], the normals in row-major order, each from the ziggurat on the 32-bit
-    words ``next_uint32(state)`` of a numpy bit generator."""
+def _add_scaled_normals(out, scale, next_uint32, state):
+    """out[k, c] += normal * scale[c], the normals in row-major order."""
     for k in range(out.shape[0]):
         for c in range(3):
-            layer, magnitude, x = _layer_draw(next_uint32(state), width)
-            if magnitude >= bound[layer]:  # about 1 % of draws
-                x = _rejected(next_uint32, state, layer, magnitude, x, bound, width, density, tail_start,
-                              inverse_tail_start, uniform_step)
-            out[k, c] += float(x) * scale[c]
+            out[k, c] += float(standard_normal(next_uint32, state)) * scale[c]
+
+
+@contextmanager
+def bit_words(rng: np.random.Generator):
+    """(next_uint32, state address) of the Generator's bit generator for :func:`standard_normal`, its lock
+    held (as numpy holds it while it draws)."""
+    bit_generator = rng.bit_generator
+    interface = bit_generator.ctypes
+    with bit_generator.lock:
+        yield interface.next_uint32, interface.state_address
 
 
 def add_white_noise(out: np.ndarray, sample_std: np.ndarray, rng: np.random.Generator) -> None:
     """Add white noise of per-axis sample std ``sample_std`` (3,) to ``out`` (n, 3) in place.
 
     The normals are those of ``rng.standard_normal((n, 3), dtype=np.float32)`` (24-bit resolution, ample for
-    noise), drawn from the same 32-bit words of the bit generator (through its C interface, holding its
-    lock), so ``rng`` is left in the state that call leaves it in.
+    noise), and ``rng`` is left in the state that call leaves it in.
     """
-    bit_generator = rng.bit_generator
-    interface = bit_generator.ctypes
-    with bit_generator.lock:
-        _add_scaled_normals(out, np.asarray(sample_std, float), interface.next_uint32, interface.state_address,
-                            _BOUND, _WIDTH, _DENSITY, _TAIL_START_F32, _INVERSE_TAIL_START_F32, _UNIFORM_STEP_F32)
+    with bit_words(rng) as (next_uint32, state):
+        _add_scaled_normals(out, np.asarray(sample_std, float), next_uint32, state)
