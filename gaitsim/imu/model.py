@@ -45,15 +45,14 @@ the realisation of the others, and a seeded run is reproducible.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
 
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
-from gaitsim.imu.normals import bit_words, standard_normal
 from gaitsim.imu.units import si_unit
 from nav import quaternion
 from nav.calibration import Calibration
@@ -100,6 +99,7 @@ _POSITIVE = ("_tau", "_range", "_bandwidth")
 RANDOM_STREAMS = ("accel_turn_on", "gyro_turn_on", "accel_instability", "gyro_instability",
                   "accel_random_walk", "gyro_random_walk", "accel_white", "gyro_white", "timestamp_jitter")
 SLOW_PROCESS_STEP = 16  # samples between nodes of the simulated bias-instability / random-walk processes
+COMPILED_FROM_SAMPLES = 1_000_000  # records this long take the compiled kernels even when numba is not loaded yet
 
 
 def _as_parameter(name: str, value) -> np.ndarray:
@@ -211,82 +211,64 @@ def _gauss_markov_std_per_instability() -> float:
 # ---------------------------------------------------------------------------------------------- pieces
 
 
-@njit(cache=True, inline="always")
-def _quantised(value, resolution, limit):
-    """``value`` rounded to a multiple of ``resolution`` (0: off; halves to even, like np.round), then
-    clipped at +-``limit`` (inf: off)."""
-    if resolution > 0:
-        value = np.round(value / resolution) * resolution
-    return min(max(value, -limit), limit)
+# ------------------------------------------------------------- numpy reference of gaitsim.imu.kernels
 
 
-STOCHASTIC_BLOCK = 4096  # samples summed at a time in a cache-resident buffer
-
-
-@njit(cache=True)
-def _add_interpolated(block, nodes, node_step, node, offset):
-    """block[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at the samples of
-    the block, the first of which lies ``offset`` samples after node ``node``; returns (node, offset) of the
-    sample after the block."""
-    for k in range(block.shape[0]):
-        frac = offset / node_step
-        for c in range(3):
-            before = nodes[node, c]
-            block[k, c] += before + frac * (nodes[node + 1, c] - before)
-        offset += 1
-        if offset == node_step:
-            node, offset = node + 1, 0
-    return node, offset
-
-
-@njit(cache=True)
-def _add_stochastic(out, signal, instability_nodes, instability_step, walk_nodes, walk_step, white_std,
-                    next_uint32, state, resolution, limit):
-    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each linearly
-    interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white noise of std
-    ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and ``limit``
-    inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it; the
-    terms are added a block at a time in a cache-resident buffer, each in its own simple loop."""
-    white = white_std[0] != 0.0 or white_std[1] != 0.0 or white_std[2] != 0.0
-    finish = resolution > 0.0 or limit < np.inf
-    buffer = np.empty((STOCHASTIC_BLOCK, 3))
-    instability_at = walk_at = (0, 0)  # (node before the block's first sample, its offset from that node)
-    for start in range(0, out.shape[0], STOCHASTIC_BLOCK):
-        stop = min(out.shape[0], start + STOCHASTIC_BLOCK)
-        block = buffer[: stop - start]
-        block[:] = signal[start:stop]
-        if instability_nodes.shape[0]:
-            instability_at = _add_interpolated(block, instability_nodes, instability_step, *instability_at)
-        if walk_nodes.shape[0]:
-            walk_at = _add_interpolated(block, walk_nodes, walk_step, *walk_at)
-        if white:
-            for k in range(block.shape[0]):
-                for c in range(3):
-                    block[k, c] += float(standard_normal(next_uint32, state)) * white_std[c]
-        if finish:
-            for k in range(block.shape[0]):
-                for c in range(3):
-                    block[k, c] = _quantised(block[k, c], resolution, limit)
-        out[start:stop] = block
-
-
-@njit(cache=True)
-def _quantise_and_clip(x, resolution, limit):
-    for k in range(x.shape[0]):
-        for c in range(3):
-            x[k, c] = _quantised(x[k, c], resolution, limit)
-
-
-@njit(cache=True)
-def _first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
+def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
     """(J+1, 3) nodes of the recursion nodes[0] = first, nodes[j+1] = decay nodes[j] + steps[j] (``steps`` (J, 3)):
     the arithmetic of scipy's ``lfilter([1], [1, -decay], steps, zi=decay * first)`` after ``first``."""
-    nodes = np.empty((steps.shape[0] + 1, 3))
-    nodes[0] = first
-    for j in range(steps.shape[0]):
-        for c in range(3):
-            nodes[j + 1, c] = decay * nodes[j, c] + steps[j, c]
-    return nodes
+    decay = float(decay)
+    node = [float(value) for value in first]
+    nodes = [node]
+    for step in steps.tolist():
+        node = [decay * value + change for value, change in zip(node, step)]
+        nodes.append(node)
+    return np.array(nodes).reshape(-1, 3)
+
+
+def add_stochastic_terms(out: np.ndarray, signal: np.ndarray, instability: tuple, walk: tuple,
+                         white_std: np.ndarray, rng: np.random.Generator, resolution: float, limit: float) -> None:
+    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each a pair
+    (nodes (J, 3), node_step), linearly interpolated between the nodes; no nodes: off) + white noise of
+    per-axis std ``white_std`` (3,) (float32 normals from ``rng``; all zero: off), then quantised and clipped
+    (:func:`quantise_and_clip`), each sum rounded in this order."""
+    if out is not signal:
+        out[:] = signal
+    samples = np.arange(out.shape[0])
+    for nodes, node_step in (instability, walk):
+        if nodes.shape[0]:
+            node = samples // node_step
+            frac = ((samples - node * node_step) / node_step)[:, None]
+            before = nodes[node]
+            out += before + frac * (nodes[node + 1] - before)
+    if np.any(white_std):
+        out += rng.standard_normal(out.shape, dtype=np.float32) * white_std
+    quantise_and_clip(out, resolution, limit)
+
+
+def quantise_and_clip(x: np.ndarray, resolution: float, limit: float) -> None:
+    """Round ``x`` to multiples of ``resolution`` (0: off; halves to even), then clip at +-``limit`` (inf:
+    off); in place."""
+    if resolution > 0:
+        np.divide(x, resolution, out=x)
+        np.round(x, out=x)
+        np.multiply(x, resolution, out=x)
+    if np.isfinite(limit):
+        np.clip(x, -limit, limit, out=x)
+
+
+def _implementation(n: int):
+    """Where the stochastic terms are computed for a record of n samples: the compiled kernels
+    (:mod:`gaitsim.imu.kernels`) for a long record or once numba is loaded, else this module's numpy reference
+    (numba's first use in a process costs more than a short record's sensor stage). Both give the same bits."""
+    if n >= COMPILED_FROM_SAMPLES or "numba" in sys.modules:
+        from gaitsim.imu import kernels
+
+        return kernels
+    return sys.modules[__name__]
+
+
+# ---------------------------------------------------------------------------------------------- pieces
 
 
 def _node_count(n: int, node_step: int) -> int:
@@ -294,8 +276,8 @@ def _node_count(n: int, node_step: int) -> int:
     return (n - 1) // node_step + 2
 
 
-def gauss_markov_nodes(n: int, dt: float, instability: np.ndarray, tau_c: float,
-                       rng: np.random.Generator) -> tuple[np.ndarray, int]:
+def gauss_markov_nodes(n: int, dt: float, instability: np.ndarray, tau_c: float, rng: np.random.Generator,
+                       recursion=first_order_recursion) -> tuple[np.ndarray, int]:
     """Nodes of a bias-instability process for n samples: first-order Gauss-Markov, stationary from the
     start, simulated exactly at every ``node_step``-th sample (module docstring, step 5).
 
@@ -306,6 +288,7 @@ def gauss_markov_nodes(n: int, dt: float, instability: np.ndarray, tau_c: float,
     instability : (3,) datasheet bias instability B (signal unit).
     tau_c : correlation time, s.
     rng : the term's own Generator.
+    recursion : :func:`first_order_recursion` or its compiled twin (the same nodes).
 
     Returns
     -------
@@ -318,7 +301,7 @@ def gauss_markov_nodes(n: int, dt: float, instability: np.ndarray, tau_c: float,
     draws = rng.standard_normal((_node_count(n, node_step), 3))
     first = draws[0] * sigma
     steps = draws[1:] * (sigma * np.sqrt(1.0 - decay**2))
-    return _first_order_recursion(first, steps, decay), node_step
+    return recursion(first, steps, decay), node_step
 
 
 def random_walk_nodes(n: int, dt: float, walk: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, int]:
@@ -452,12 +435,13 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
             out += (out - bias) * (p[f"{s}_temp_scale"] * delta) + p[f"{s}_temp_bias"] * delta
 
     # 5.-7. stochastic terms, bandwidth, quantisation and saturation: one pass unless a bandwidth is on
+    implementation = _implementation(n)
     measured = []
     for signal, s in ((acc_m, "accel"), (gyr_m, "gyro")):
         instability, walk = _NO_NODES, _NO_NODES
         if np.any(p[f"{s}_bias_instability"]):
-            instability = gauss_markov_nodes(n, dt, p[f"{s}_bias_instability"],
-                                             float(p[f"{s}_bias_instability_tau"]), streams[f"{s}_instability"])
+            instability = gauss_markov_nodes(n, dt, p[f"{s}_bias_instability"], float(p[f"{s}_bias_instability_tau"]),
+                                             streams[f"{s}_instability"], implementation.first_order_recursion)
         if np.any(p[f"{s}_random_walk"]):
             walk = random_walk_nodes(n, dt, p[f"{s}_random_walk"], streams[f"{s}_random_walk"])
         white_std = np.asarray(p[f"{s}_noise_density"] * np.sqrt(rate_hz))
@@ -468,14 +452,13 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
         if instability is _NO_NODES and walk is _NO_NODES and not np.any(white_std) and not resolution_now and \
                 limit_now == np.inf:
             if out is not signal:
-                out[:] = signal  # nothing to add (numpy's copy is faster than the pass below)
+                out[:] = signal  # nothing to add
         else:
-            with bit_words(streams[f"{s}_white"]) as (next_uint32, state):
-                _add_stochastic(out, signal, *instability, *walk, white_std, next_uint32, state, resolution_now,
-                                limit_now)
+            implementation.add_stochastic_terms(out, signal, instability, walk, white_std, streams[f"{s}_white"],
+                                                resolution_now, limit_now)
         if filtered:
             out = low_pass(out, bandwidth, rate_hz, spec.filter_order)
-            _quantise_and_clip(out, resolution, limit)
+            implementation.quantise_and_clip(out, resolution, limit)
         measured.append(out)
     acc_m, gyr_m = measured
     return t_meas, acc_m, gyr_m
