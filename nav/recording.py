@@ -283,15 +283,17 @@ def _tables(rec: Recording) -> dict[str, np.ndarray]:
     return tables
 
 
-def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAULT_FORM, parquet: bool = False) -> None:
-    """Write ``rec`` into an existing (temporary) folder. Prefer :func:`write_recording`."""
+def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAULT_FORM, parquet: bool = False,
+                         workers: int = 1) -> None:
+    """Write ``rec`` into an existing (temporary) folder, its tables' text formatted by ``workers`` processes
+    (:func:`nav.storage.write_tables`; the same bytes with any number). Prefer :func:`write_recording`."""
     folder = Path(folder)
     storage.check_form(form)
+    tables = {name: (folder / f"{name}.{form}", TABLE_COLUMNS[name], table,
+                     TRUTH_RESOLUTION if name == "truth" else None) for name, table in _tables(rec).items()}
+    storage.write_tables(list(tables.values()), workers)
     files = {}
-    for name, table in _tables(rec).items():
-        path = folder / f"{name}.{form}"
-        resolution = TRUTH_RESOLUTION if name == "truth" else None
-        write_csv(path, TABLE_COLUMNS[name], table, resolution)
+    for name, (path, _header, table, resolution) in tables.items():
         files[path.name] = storage.sha256(path)
         if parquet:
             twin = storage.write_twin(path, TABLE_COLUMNS[name],

@@ -15,10 +15,13 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+import multiprocessing
+import os
 import warnings
 import zlib
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from itertools import chain, islice
 from pathlib import Path
 
 import numpy as np
@@ -48,15 +51,24 @@ def column_formats(header: tuple[str, ...], resolution: dict[str, int] | None = 
             for name in header]
 
 
+def _block_jobs(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None) -> list[tuple]:
+    """(row format, rows) pairs of a table's :data:`TEXT_BLOCK_ROWS`-row blocks."""
+    table = np.asarray(table, float).reshape(-1, len(header))
+    row = ",".join(column_formats(header, resolution)) + "\n"
+    return [(row, table[start:start + TEXT_BLOCK_ROWS]) for start in range(0, len(table), TEXT_BLOCK_ROWS)]
+
+
+def _block_text(job: tuple) -> str:
+    """The CSV text of one block: a (row format, rows) pair of :func:`_block_jobs`."""
+    row, block = job
+    return (row * len(block)) % tuple(block.ravel().tolist())
+
+
 def table_blocks(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> Iterator[str]:
     """The CSV text of a table in blocks: the header row of column names, then :data:`TEXT_BLOCK_ROWS` rows
     (one per sample) at a time."""
-    table = np.asarray(table, float).reshape(-1, len(header))
-    row = ",".join(column_formats(header, resolution)) + "\n"
     yield ",".join(header) + "\n"
-    for start in range(0, len(table), TEXT_BLOCK_ROWS):
-        block = table[start:start + TEXT_BLOCK_ROWS]
-        yield (row * len(block)) % tuple(block.ravel().tolist())
+    yield from map(_block_text, _block_jobs(header, table, resolution))
 
 
 def table_text(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> str:
@@ -73,18 +85,57 @@ def write_text(path: Path, text: str) -> None:
 
 
 def write_table(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> None:
-    """Write the CSV text of a table (:func:`table_text`) to ``path``: the bytes of :func:`write_text`, but a
-    ``.gz`` table is compressed block by block in a second thread while the next block is formatted (zlib
-    releases the GIL; one gzip stream with a zero timestamp, as ``gzip.compress(..., mtime=0)`` writes it)."""
-    blocks = (block.encode() for block in table_blocks(header, table, resolution))
+    """Write the CSV text of a table (:func:`table_text`) to ``path``: the bytes of :func:`write_text` (see
+    :func:`write_tables`)."""
+    write_tables([(path, header, table, resolution)])
+
+
+def write_tables(tables: list[tuple], workers: int = 1) -> None:
+    """Write tables, each given as the arguments of :func:`write_table` (path, header, table, resolution), with
+    the bytes of :func:`write_text`.
+
+    A ``.gz`` table is compressed block by block in a second thread while the next block is formatted (zlib
+    releases the GIL; one gzip stream with a zero timestamp, as ``gzip.compress(..., mtime=0)`` writes it).
+    With ``workers`` > 1 the blocks of all the tables are formatted by that many forked processes (formatting
+    exact text holds the GIL: it is most of the time) while this process compresses and writes them in order;
+    one process formats them where fork is not available or this process is itself a pool's worker.
+    """
+    jobs = [_block_jobs(header, table, resolution) for _path, header, table, resolution in tables]
+    pool = _fork_pool(min(workers, sum(map(len, jobs))))
+    try:
+        texts = pool.imap(_block_text, [job for table_jobs in jobs for job in table_jobs]) if pool else \
+            map(_block_text, (job for table_jobs in jobs for job in table_jobs))
+        for (path, header, _table, _resolution), table_jobs in zip(tables, jobs):
+            _write_blocks(path, chain([",".join(header) + "\n"], islice(texts, len(table_jobs))))
+    finally:
+        if pool:
+            pool.terminate()
+
+
+def available_workers() -> int:
+    """Cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _fork_pool(workers: int):
+    """A pool of ``workers`` forked processes, or None (one worker, no fork, or a daemonic pool worker)."""
+    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods() or \
+            multiprocessing.current_process().daemon:
+        return None
+    return multiprocessing.get_context("fork").Pool(workers)
+
+
+def _write_blocks(path: Path, blocks) -> None:
+    """Write text ``blocks`` (an iterable of str) to ``path``, gzip-compressed in a second thread for ``.gz``."""
+    encoded = (block.encode() for block in blocks)
     with open(path, "wb") as fh:
         if Path(path).suffix != ".gz":
-            fh.writelines(blocks)
+            fh.writelines(encoded)
             return
         compressor = zlib.compressobj(GZIP_LEVEL, zlib.DEFLATED, 16 + zlib.MAX_WBITS)  # 16+: gzip container
         with ThreadPoolExecutor(max_workers=1) as pool:
             pending = None
-            for block in blocks:  # formats the next block while the pending one is compressed
+            for block in encoded:  # takes the next block while the pending one is compressed
                 if pending is not None:
                     fh.write(pending.result())
                 pending = pool.submit(compressor.compress, block)
