@@ -64,6 +64,11 @@ def _block_text(job: tuple) -> str:
     return (row * len(block)) % tuple(block.ravel().tolist())
 
 
+def _block_bytes(job: tuple) -> bytes:
+    """:func:`_block_text` encoded (ASCII), as written."""
+    return _block_text(job).encode()
+
+
 def table_blocks(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> Iterator[str]:
     """The CSV text of a table in blocks: the header row of column names, then :data:`TEXT_BLOCK_ROWS` rows
     (one per sample) at a time."""
@@ -103,10 +108,10 @@ def write_tables(tables: list[tuple], workers: int = 1) -> None:
     jobs = [_block_jobs(header, table, resolution) for _path, header, table, resolution in tables]
     pool = _fork_pool(min(workers, sum(map(len, jobs))))
     try:
-        texts = pool.imap(_block_text, [job for table_jobs in jobs for job in table_jobs]) if pool else \
-            map(_block_text, (job for table_jobs in jobs for job in table_jobs))
+        every_job = [job for table_jobs in jobs for job in table_jobs]
+        blocks = pool.imap(_block_bytes, every_job) if pool else map(_block_bytes, every_job)
         for (path, header, _table, _resolution), table_jobs in zip(tables, jobs):
-            _write_blocks(path, chain([",".join(header) + "\n"], islice(texts, len(table_jobs))))
+            _write_blocks(path, chain([(",".join(header) + "\n").encode()], islice(blocks, len(table_jobs))))
     finally:
         if pool:
             pool.terminate()
@@ -126,16 +131,15 @@ def _fork_pool(workers: int):
 
 
 def _write_blocks(path: Path, blocks) -> None:
-    """Write text ``blocks`` (an iterable of str) to ``path``, gzip-compressed in a second thread for ``.gz``."""
-    encoded = (block.encode() for block in blocks)
+    """Write ``blocks`` (an iterable of bytes) to ``path``, gzip-compressed in a second thread for ``.gz``."""
     with open(path, "wb") as fh:
         if Path(path).suffix != ".gz":
-            fh.writelines(encoded)
+            fh.writelines(blocks)
             return
         compressor = zlib.compressobj(GZIP_LEVEL, zlib.DEFLATED, 16 + zlib.MAX_WBITS)  # 16+: gzip container
         with ThreadPoolExecutor(max_workers=1) as pool:
             pending = None
-            for block in encoded:  # takes the next block while the pending one is compressed
+            for block in blocks:  # takes the next block while the pending one is compressed
                 if pending is not None:
                     fh.write(pending.result())
                 pending = pool.submit(compressor.compress, block)
