@@ -1,19 +1,24 @@
 """Speed of the IMU forward model (gaitsim.imu.model.apply_sensor), one core.
 
 Prints IMU samples per second (one sample = one 6-axis reading: 3 accel + 3 gyro) for several presets and
-for a configuration with every term on, on a 2,000,000-sample (about 42 min) walking-like record at 800 Hz (best of 5 runs).
-Run: python benchmarks/imu_speed.py [n_samples]
+for a configuration with every term on, on a 2,000,000-sample (about 42 min) walking-like record at 800 Hz (best of 9 runs),
+with one BLAS thread (the deterministic terms' matrix products) unless OPENBLAS_NUM_THREADS is set. Records of
+1 M samples or more take the compiled kernels (gaitsim.imu.kernels); shorter ones the numpy reference path.
+Run: PYTHONPATH=$PWD python benchmarks/imu_speed.py [n_samples]
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
-import numpy as np
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core: before numpy loads OpenBLAS
 
-from gaitsim.imu.model import apply_sensor
-from gaitsim.imu.presets import get_preset
+import numpy as np  # noqa: E402
+
+from gaitsim.imu.model import apply_sensor  # noqa: E402
+from gaitsim.imu.presets import get_preset  # noqa: E402
 
 
 def truth(n: int, rate_hz: float = 800.0):
@@ -35,7 +40,7 @@ def everything_on():
 
 
 def samples_per_second(spec, t, acc, gyr, repeats: int = 9) -> float:
-    apply_sensor(spec, t[:1000], acc[:1000], gyr[:1000], np.random.default_rng(0))  # compile numba kernels
+    apply_sensor(spec, t, acc, gyr, np.random.default_rng(0))  # load the compiled kernels
     best = np.inf
     for seed in range(repeats):
         start = time.perf_counter()
