@@ -106,10 +106,10 @@ def write_tables(tables: list[tuple], workers: int = 1) -> None:
     one process formats them where fork is not available or this process is itself a pool's worker.
     """
     jobs = [_block_jobs(header, table, resolution) for _path, header, table, resolution in tables]
-    pool = _fork_pool(min(workers, sum(map(len, jobs))))
+    every_job = [job for table_jobs in jobs for job in table_jobs]
+    pool = _fork_pool(min(workers, len(every_job)), every_job)
     try:
-        every_job = [job for table_jobs in jobs for job in table_jobs]
-        blocks = pool.imap(_block_bytes, every_job) if pool else map(_block_bytes, every_job)
+        blocks = pool.imap(_forked_block_bytes, range(len(every_job))) if pool else map(_block_bytes, every_job)
         for (path, header, _table, _resolution), table_jobs in zip(tables, jobs):
             _write_blocks(path, chain([(",".join(header) + "\n").encode()], islice(blocks, len(table_jobs))))
     finally:
@@ -122,12 +122,25 @@ def available_workers() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def _fork_pool(workers: int):
-    """A pool of ``workers`` forked processes, or None (one worker, no fork, or a daemonic pool worker)."""
+def _fork_pool(workers: int, jobs: list):
+    """A pool of ``workers`` forked processes that hold ``jobs`` (inherited, not pickled: a worker is sent job
+    numbers), or None (one worker, no fork, or a daemonic pool worker)."""
     if workers < 2 or "fork" not in multiprocessing.get_all_start_methods() or \
             multiprocessing.current_process().daemon:
         return None
-    return multiprocessing.get_context("fork").Pool(workers)
+    return multiprocessing.get_context("fork").Pool(workers, initializer=_hold_jobs, initargs=(jobs,))
+
+
+_worker_jobs: list = []  # in a forked worker: the jobs of write_tables
+
+
+def _hold_jobs(jobs: list) -> None:
+    _worker_jobs[:] = jobs
+
+
+def _forked_block_bytes(number: int) -> bytes:
+    """:func:`_block_bytes` of job ``number`` held by this worker."""
+    return _block_bytes(_worker_jobs[number])
 
 
 def _write_blocks(path: Path, blocks) -> None:
