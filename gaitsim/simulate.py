@@ -102,9 +102,9 @@ def generate(scenario: Scenario, out: str | Path, seed: int | None = None, runs:
     With one run the recording is ``out`` itself; with several, ``out/run-000``, ``out/run-001``, ...
     ``form`` and ``parquet`` choose how the tables are stored (:func:`nav.recording.write_recording`);
     ``progress`` shows a progress bar over the runs; ``workers`` processes format the tables' text (default:
-    one per available core; the bytes are the same with any number).
+    :func:`nav.storage.format_workers`; the bytes are the same with any number).
     """
-    workers = storage.available_workers() if workers is None else workers
+    workers = storage.format_workers() if workers is None else workers
     runs = scenario.runs if runs is None else runs
     if runs < 1:
         raise ValueError(f"runs = {runs}: must be >= 1")

@@ -29,6 +29,7 @@ import numpy as np
 FORMS = ("csv.gz", "csv")  # a table NAME is stored as NAME.csv.gz or NAME.csv
 DEFAULT_FORM = "csv.gz"
 GZIP_LEVEL = 1  # the fastest level: 14.1 MB for a 100 m truth table against 12.9 MB at level 6, in a third of the time
+MAX_FORMAT_WORKERS = 4  # one process compresses (gzip level 1) about as fast as two format exact text
 TEXT_BLOCK_ROWS = 8192  # rows formatted at a time; a written .gz table compresses each block while the next is formatted
 EXACT_FORMAT = "%.17g"  # float64 -> text -> the same float64
 TWIN_SUFFIX = ".parquet"
@@ -117,9 +118,11 @@ def write_tables(tables: list[tuple], workers: int = 1) -> None:
             pool.terminate()
 
 
-def available_workers() -> int:
-    """Cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+def format_workers() -> int:
+    """Worker processes worth forking to format text (:func:`write_tables`): one per core this process may run
+    on, at most :data:`MAX_FORMAT_WORKERS`."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return min(cores, MAX_FORMAT_WORKERS)
 
 
 def _fork_pool(workers: int, jobs: list):
