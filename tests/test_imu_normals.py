@@ -1,16 +1,26 @@
-"""The compiled white noise (gaitsim.imu.normals) draws numpy's float32 normals bit for bit and leaves the
-Generator where numpy leaves it: on random words of every numpy bit generator, and on crafted words at every
-edge of the ziggurat (each layer's bound, the wedge tests next to their decision, the tail)."""
+"""The compiled white noise (gaitsim.imu.normals, in the stochastic pass of gaitsim.imu.kernels) draws numpy's
+float32 normals bit for bit and leaves the Generator where numpy leaves it: on random words of every numpy bit
+generator, and on crafted words at every edge of the ziggurat (each layer's bound, the wedge tests next to
+their decision, the tail)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from gaitsim.imu.normals import add_white_noise, ziggurat_tables
+from gaitsim.imu.kernels import add_stochastic_terms
+from gaitsim.imu.normals import ziggurat_tables
 
 BIT_GENERATORS = (np.random.PCG64, np.random.PCG64DXSM, np.random.SFC64, np.random.Philox, np.random.MT19937)
 BOUND, WIDTH, DENSITY = ziggurat_tables()
+
+
+NO_NODES = (np.zeros((0, 3)), 1)
+
+
+def add_white_noise(out, sample_std, rng):
+    """The compiled pass with white noise alone."""
+    add_stochastic_terms(out, out, NO_NODES, NO_NODES, np.asarray(sample_std, float), rng, 0.0, np.inf)
 
 
 def numpy_noise(n, sample_std, rng):

@@ -14,6 +14,7 @@ from numba import njit
 
 from gaitsim.imu.normals import bit_words, standard_normal
 
+
 @njit(cache=True, inline="always")
 def _quantised(value, resolution, limit):
     """``value`` rounded to a multiple of ``resolution`` (0: off; halves to even, like np.round), then
@@ -44,7 +45,7 @@ def _add_interpolated(block, nodes, node_step, node, offset):
 
 @njit(cache=True)
 def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk_nodes, walk_step, white_std,
-                    next_uint32, state, resolution, limit):
+                          next_uint32, state, resolution, limit):
     """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each linearly
     interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white noise of std
     ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and ``limit``

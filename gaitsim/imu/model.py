@@ -208,9 +208,6 @@ def _gauss_markov_std_per_instability() -> float:
     return BIAS_INSTABILITY_FLOOR / GAUSS_MARKOV_PEAK[1]
 
 
-# ---------------------------------------------------------------------------------------------- pieces
-
-
 # ------------------------------------------------------------- numpy reference of gaitsim.imu.kernels
 
 

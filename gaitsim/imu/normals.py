@@ -3,10 +3,11 @@
 numpy draws a float32 standard normal with a 256-layer ziggurat (Marsaglia and Tsang, J. Stat. Softw. 5(8),
 2000) on the 32-bit words of its bit generator. Called through ``Generator.standard_normal``, that costs
 about 10 ns per normal here, most of it outside the bit generator and the ziggurat. :func:`add_white_noise`
-runs the same ziggurat, with the same tables and the same float32 arithmetic, in one compiled loop that takes
-the words from the bit generator's own C function (``BitGenerator.ctypes.next_uint32``) and also scales and
-adds the noise: the normals are the ones numpy gives, bit for bit, and the Generator is left in the state
-numpy leaves it in (``tests/test_imu_normals.py``), so a seeded run gives the sensor output it gave before.
+runs the same ziggurat, with the same tables and the same float32 arithmetic, in compiled code (the IMU
+model's stochastic pass, :mod:`gaitsim.imu.kernels`) that takes the words from the bit generator's own C
+function (``BitGenerator.ctypes.next_uint32``): the normals are the ones numpy gives, bit for bit, and the
+Generator is left in the state numpy leaves it in (``tests/test_imu_normals.py``), so a seeded run gives the
+sensor output it gave before.
 
 The ziggurat: a 23-bit magnitude ``m``, a sign bit and an 8-bit layer ``i`` are read from one 32-bit word;
 ``m * w[i]`` is returned when ``m < k[i]`` (about 99 % of draws); else the wedge of layer ``i`` is tested
@@ -99,14 +100,6 @@ def standard_normal(next_uint32, state):
     return x
 
 
-@njit(cache=True)
-def _add_scaled_normals(out, scale, next_uint32, state):
-    """out[k, c] += normal * scale[c], the normals in row-major order."""
-    for k in range(out.shape[0]):
-        for c in range(3):
-            out[k, c] += float(standard_normal(next_uint32, state)) * scale[c]
-
-
 @contextmanager
 def bit_words(rng: np.random.Generator):
     """(next_uint32, state address) of the Generator's bit generator for :func:`standard_normal`, its lock
@@ -116,12 +109,3 @@ def bit_words(rng: np.random.Generator):
     with bit_generator.lock:
         yield interface.next_uint32, interface.state_address
 
-
-def add_white_noise(out: np.ndarray, sample_std: np.ndarray, rng: np.random.Generator) -> None:
-    """Add white noise of per-axis sample std ``sample_std`` (3,) to ``out`` (n, 3) in place.
-
-    The normals are those of ``rng.standard_normal((n, 3), dtype=np.float32)`` (24-bit resolution, ample for
-    noise), and ``rng`` is left in the state that call leaves it in.
-    """
-    with bit_words(rng) as (next_uint32, state):
-        _add_scaled_normals(out, np.asarray(sample_std, float), next_uint32, state)
