@@ -17,6 +17,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core: before numpy loa
 
 import numpy as np  # noqa: E402
 
+import gaitsim.imu.kernels  # noqa: E402,F401  (numba loaded before the arrays: see samples_per_second)
 from gaitsim.imu.model import apply_sensor  # noqa: E402
 from gaitsim.imu.presets import get_preset  # noqa: E402
 
@@ -40,6 +41,10 @@ def everything_on():
 
 
 def samples_per_second(spec, t, acc, gyr, repeats: int = 9) -> float:
+    """Samples per second of apply_sensor, best of ``repeats``. numba is imported before the arrays are made, as
+    the model imported it before issue 16's IMU work (once, on a loaded machine, importing it in the first call
+    instead made the ideal preset's copies take 10-15 ms instead of 6 ms per 1 M samples, repeatably for a
+    while; later not: cause not found, no page faults counted)."""
     apply_sensor(spec, t, acc, gyr, np.random.default_rng(0))  # load the compiled kernels
     best = np.inf
     for seed in range(repeats):

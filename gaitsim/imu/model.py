@@ -445,12 +445,12 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
         bandwidth, resolution, limit = (float(p[f"{s}_{name}"]) for name in ("bandwidth", "resolution", "range"))
         filtered = np.isfinite(bandwidth)
         resolution_now, limit_now = (0.0, np.inf) if filtered else (resolution, limit)  # else after the filter
-        out = np.empty_like(signal) if signal is acc or signal is gyr else signal  # never write the inputs
+        given = signal is acc or signal is gyr  # an input array: never written, the output is a new array
         if instability is _NO_NODES and walk is _NO_NODES and not np.any(white_std) and not resolution_now and \
                 limit_now == np.inf:
-            if out is not signal:
-                out[:] = signal  # nothing to add
+            out = signal.copy() if given else signal  # nothing to add
         else:
+            out = np.empty_like(signal) if given else signal
             implementation.add_stochastic_terms(out, signal, instability, walk, white_std, streams[f"{s}_white"],
                                                 resolution_now, limit_now)
         if filtered:
