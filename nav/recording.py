@@ -301,7 +301,7 @@ def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAU
             files[twin.name] = storage.sha256(twin)
     meta = dict(rec.meta)
     meta.setdefault("schema_version", SCHEMA_VERSION)
-    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if k.split(".")[0] in _tables(rec)})
+    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if k.split(".")[0] in tables})
     meta["storage"] = {
         "form": form,
         "exact": "every column is stored as float64 round trip (%.17g) except those in 'resolution'",
