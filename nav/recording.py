@@ -291,10 +291,10 @@ def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAU
     storage.check_form(form)
     tables = {name: (folder / f"{name}.{form}", TABLE_COLUMNS[name], table,
                      TRUTH_RESOLUTION if name == "truth" else None) for name, table in _tables(rec).items()}
-    storage.write_tables(list(tables.values()), workers)
+    digests = storage.write_tables(list(tables.values()), workers)
     files = {}
-    for name, (path, _header, table, resolution) in tables.items():
-        files[path.name] = storage.sha256(path)
+    for (name, (path, _header, table, resolution)), digest in zip(tables.items(), digests):
+        files[path.name] = digest
         if parquet:
             twin = storage.write_twin(path, TABLE_COLUMNS[name],
                                       table if resolution is None else read_csv(path, TABLE_COLUMNS[name]))

@@ -90,15 +90,15 @@ def write_text(path: Path, text: str) -> None:
     Path(path).write_bytes(data)
 
 
-def write_table(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> None:
+def write_table(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> str:
     """Write the CSV text of a table (:func:`table_text`) to ``path``: the bytes of :func:`write_text` (see
-    :func:`write_tables`)."""
-    write_tables([(path, header, table, resolution)])
+    :func:`write_tables`); returns the file's SHA-256 (hex)."""
+    return write_tables([(path, header, table, resolution)])[0]
 
 
-def write_tables(tables: list[tuple], workers: int = 1) -> None:
+def write_tables(tables: list[tuple], workers: int = 1) -> list[str]:
     """Write tables, each given as the arguments of :func:`write_table` (path, header, table, resolution), with
-    the bytes of :func:`write_text`.
+    the bytes of :func:`write_text`; returns each file's SHA-256 (hex), taken from the bytes as they are written.
 
     A ``.gz`` table is compressed block by block in a second thread while the next block is formatted (zlib
     releases the GIL; one gzip stream with a zero timestamp, as ``gzip.compress(..., mtime=0)`` writes it).
@@ -111,8 +111,8 @@ def write_tables(tables: list[tuple], workers: int = 1) -> None:
     pool = _fork_pool(min(workers, len(every_job)), every_job)
     try:
         blocks = pool.imap(_forked_block_bytes, range(len(every_job))) if pool else map(_block_bytes, every_job)
-        for (path, header, _table, _resolution), table_jobs in zip(tables, jobs):
-            _write_blocks(path, chain([(",".join(header) + "\n").encode()], islice(blocks, len(table_jobs))))
+        return [_write_blocks(path, chain([(",".join(header) + "\n").encode()], islice(blocks, len(table_jobs))))
+                for (path, header, _table, _resolution), table_jobs in zip(tables, jobs)]
     finally:
         if pool:
             pool.terminate()
@@ -146,22 +146,30 @@ def _forked_block_bytes(number: int) -> bytes:
     return _block_bytes(_worker_jobs[number])
 
 
-def _write_blocks(path: Path, blocks) -> None:
-    """Write ``blocks`` (an iterable of bytes) to ``path``, gzip-compressed in a second thread for ``.gz``."""
+def _write_blocks(path: Path, blocks) -> str:
+    """Write ``blocks`` (an iterable of bytes) to ``path``, gzip-compressed in a second thread for ``.gz``;
+    returns the SHA-256 (hex) of the bytes written."""
+    digest = hashlib.sha256()
     with open(path, "wb") as fh:
+        def write(data: bytes) -> None:
+            fh.write(data)
+            digest.update(data)
+
         if Path(path).suffix != ".gz":
-            fh.writelines(blocks)
-            return
+            for block in blocks:
+                write(block)
+            return digest.hexdigest()
         compressor = zlib.compressobj(GZIP_LEVEL, zlib.DEFLATED, 16 + zlib.MAX_WBITS)  # 16+: gzip container
         with ThreadPoolExecutor(max_workers=1) as pool:
             pending = None
             for block in blocks:  # takes the next block while the pending one is compressed
                 if pending is not None:
-                    fh.write(pending.result())
+                    write(pending.result())
                 pending = pool.submit(compressor.compress, block)
             if pending is not None:
-                fh.write(pending.result())
-        fh.write(compressor.flush())
+                write(pending.result())
+        write(compressor.flush())
+    return digest.hexdigest()
 
 
 def open_text(path: Path):

@@ -16,7 +16,8 @@ HEADER = ("t", "pos_x", "acc_x")
 def test_written_table_is_the_table_text(tmp_path, rows, form):
     table = np.random.default_rng(rows).normal(size=(rows, 3)) * [1.0, 100.0, 1e-7]
     path = tmp_path / f"table.{form}"
-    storage.write_table(path, HEADER, table, {"pos": 9})
+    digest = storage.write_table(path, HEADER, table, {"pos": 9})
+    assert digest == storage.sha256(path)
     text = storage.table_text(HEADER, table, {"pos": 9})
     data = path.read_bytes()
     if form == "csv.gz":
