@@ -215,12 +215,15 @@ def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) ->
     """(J+1, 3) nodes of the recursion nodes[0] = first, nodes[j+1] = decay nodes[j] + steps[j] (``steps`` (J, 3)):
     the arithmetic of scipy's ``lfilter([1], [1, -decay], steps, zi=decay * first)`` after ``first``."""
     decay = float(decay)
-    node = [float(value) for value in first]
-    nodes = [node]
-    for step in steps.tolist():
-        node = [decay * value + change for value, change in zip(node, step)]
-        nodes.append(node)
-    return np.array(nodes).reshape(-1, 3)
+    columns = []
+    for axis in range(3):  # Python floats: the same IEEE operations, axis by axis
+        value = float(first[axis])
+        column = [value]
+        for change in steps[:, axis].tolist():
+            value = decay * value + change
+            column.append(value)
+        columns.append(column)
+    return np.ascontiguousarray(np.array(columns).T)
 
 
 def add_stochastic_terms(out: np.ndarray, signal: np.ndarray, instability: tuple, walk: tuple,
