@@ -192,10 +192,10 @@ class Calibration:
 
 
 def _add_per_axis(x: np.ndarray, per_axis: np.ndarray) -> None:
-    """x[:, c] += per_axis[c] in place, column by column: the sums of ``x + per_axis``, but numpy broadcasts
-    a (3,) vector over (N, 3) rows one 3-element inner loop per row, three times slower."""
+    """x[..., c] += per_axis[c] in place, axis by axis: the sums of ``x + per_axis``, but numpy broadcasts a
+    (3,) vector over (N, 3) rows one 3-element inner loop per row, three times slower."""
     for c in range(3):
-        x[:, c] += per_axis[c]
+        x[..., c] += per_axis[c]
 
 
 def _to_json(cal: Calibration) -> dict:
