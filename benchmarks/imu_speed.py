@@ -1,19 +1,25 @@
 """Speed of the IMU forward model (gaitsim.imu.model.apply_sensor), one core.
 
 Prints IMU samples per second (one sample = one 6-axis reading: 3 accel + 3 gyro) for several presets and
-for a configuration with every term on, on a 2,000,000-sample (about 42 min) walking-like record at 800 Hz (best of 5 runs).
-Run: python benchmarks/imu_speed.py [n_samples]
+for a configuration with every term on, on a 2,000,000-sample (about 42 min) walking-like record at 800 Hz (best of 9 runs),
+with one BLAS thread (the deterministic terms' matrix products) unless OPENBLAS_NUM_THREADS is set. Records of
+1 M samples or more take the compiled kernels (gaitsim.imu.kernels); shorter ones the numpy reference path.
+Run: PYTHONPATH=$PWD python benchmarks/imu_speed.py [n_samples]
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
-import numpy as np
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core: before numpy loads OpenBLAS
 
-from gaitsim.imu.model import apply_sensor
-from gaitsim.imu.presets import get_preset
+import numpy as np  # noqa: E402
+
+import gaitsim.imu.kernels  # noqa: E402,F401  (numba loaded before the arrays: see samples_per_second)
+from gaitsim.imu.model import apply_sensor  # noqa: E402
+from gaitsim.imu.presets import get_preset  # noqa: E402
 
 
 def truth(n: int, rate_hz: float = 800.0):
@@ -34,8 +40,12 @@ def everything_on():
         clock_error=50e-6, timestamp_jitter=1e-6, accel_gyro_skew=2e-4, mounting_misalignment=[0.01, -0.02, 0.03])
 
 
-def samples_per_second(spec, t, acc, gyr, repeats: int = 5) -> float:
-    apply_sensor(spec, t[:1000], acc[:1000], gyr[:1000], np.random.default_rng(0))  # compile numba kernels
+def samples_per_second(spec, t, acc, gyr, repeats: int = 9) -> float:
+    """Samples per second of apply_sensor, best of ``repeats``. numba is imported before the arrays are made, as
+    the model imported it before issue 16's IMU work (once, on a loaded machine, importing it in the first call
+    instead made the ideal preset's copies take 10-15 ms instead of 6 ms per 1 M samples, repeatably for a
+    while; later not: cause not found, no page faults counted)."""
+    apply_sensor(spec, t, acc, gyr, np.random.default_rng(0))  # load the compiled kernels
     best = np.inf
     for seed in range(repeats):
         start = time.perf_counter()

@@ -96,13 +96,15 @@ def simulate_walk(scenario: Scenario, seed: int | None = None, run: int = 0) -> 
 
 def generate(scenario: Scenario, out: str | Path, seed: int | None = None, runs: int | None = None,
              overwrite: bool = False, form: str = storage.DEFAULT_FORM, parquet: bool = False,
-             progress: bool = False) -> list[Recording]:
+             progress: bool = False, workers: int | None = None) -> list[Recording]:
     """Simulate ``runs`` runs of ``scenario`` and write them to ``out`` (nothing is left there on failure).
 
     With one run the recording is ``out`` itself; with several, ``out/run-000``, ``out/run-001``, ...
     ``form`` and ``parquet`` choose how the tables are stored (:func:`nav.recording.write_recording`);
-    ``progress`` shows a progress bar over the runs.
+    ``progress`` shows a progress bar over the runs; ``workers`` processes format the tables' text (default:
+    :func:`nav.storage.format_workers`; the bytes are the same with any number).
     """
+    workers = storage.format_workers() if workers is None else workers
     runs = scenario.runs if runs is None else runs
     if runs < 1:
         raise ValueError(f"runs = {runs}: must be >= 1")
@@ -115,7 +117,7 @@ def generate(scenario: Scenario, out: str | Path, seed: int | None = None, runs:
             rec = simulate_walk(scenario, seed=seed, run=r)
             folder = tmp if runs == 1 else tmp / f"run-{r:03d}"
             folder.mkdir(exist_ok=True)
-            write_recording_into(rec, folder, form=form, parquet=parquet)
+            write_recording_into(rec, folder, form=form, parquet=parquet, workers=workers)
             recordings.append(rec)
     return recordings
 

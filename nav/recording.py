@@ -283,23 +283,25 @@ def _tables(rec: Recording) -> dict[str, np.ndarray]:
     return tables
 
 
-def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAULT_FORM, parquet: bool = False) -> None:
-    """Write ``rec`` into an existing (temporary) folder. Prefer :func:`write_recording`."""
+def write_recording_into(rec: Recording, folder: Path, form: str = storage.DEFAULT_FORM, parquet: bool = False,
+                         workers: int = 1) -> None:
+    """Write ``rec`` into an existing (temporary) folder, its tables' text formatted by ``workers`` processes
+    (:func:`nav.storage.write_tables`; the same bytes with any number). Prefer :func:`write_recording`."""
     folder = Path(folder)
     storage.check_form(form)
+    tables = {name: (folder / f"{name}.{form}", TABLE_COLUMNS[name], table,
+                     TRUTH_RESOLUTION if name == "truth" else None) for name, table in _tables(rec).items()}
+    digests = storage.write_tables(list(tables.values()), workers)
     files = {}
-    for name, table in _tables(rec).items():
-        path = folder / f"{name}.{form}"
-        resolution = TRUTH_RESOLUTION if name == "truth" else None
-        write_csv(path, TABLE_COLUMNS[name], table, resolution)
-        files[path.name] = storage.sha256(path)
+    for (name, (path, _header, table, resolution)), digest in zip(tables.items(), digests):
+        files[path.name] = digest
         if parquet:
             twin = storage.write_twin(path, TABLE_COLUMNS[name],
                                       table if resolution is None else read_csv(path, TABLE_COLUMNS[name]))
             files[twin.name] = storage.sha256(twin)
     meta = dict(rec.meta)
     meta.setdefault("schema_version", SCHEMA_VERSION)
-    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if k.split(".")[0] in _tables(rec)})
+    meta.setdefault("columns", {k: v for k, v in COLUMN_UNITS.items() if k.split(".")[0] in tables})
     meta["storage"] = {
         "form": form,
         "exact": "every column is stored as float64 round trip (%.17g) except those in 'resolution'",

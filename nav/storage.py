@@ -15,10 +15,13 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+import multiprocessing
+import os
 import warnings
 import zlib
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from itertools import chain, islice
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +29,7 @@ import numpy as np
 FORMS = ("csv.gz", "csv")  # a table NAME is stored as NAME.csv.gz or NAME.csv
 DEFAULT_FORM = "csv.gz"
 GZIP_LEVEL = 1  # the fastest level: 14.1 MB for a 100 m truth table against 12.9 MB at level 6, in a third of the time
+MAX_FORMAT_WORKERS = 4  # one process compresses (gzip level 1) about as fast as two format exact text
 TEXT_BLOCK_ROWS = 8192  # rows formatted at a time; a written .gz table compresses each block while the next is formatted
 EXACT_FORMAT = "%.17g"  # float64 -> text -> the same float64
 TWIN_SUFFIX = ".parquet"
@@ -48,15 +52,29 @@ def column_formats(header: tuple[str, ...], resolution: dict[str, int] | None = 
             for name in header]
 
 
+def _block_jobs(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None) -> list[tuple]:
+    """(row format, rows) pairs of a table's :data:`TEXT_BLOCK_ROWS`-row blocks."""
+    table = np.asarray(table, float).reshape(-1, len(header))
+    row = ",".join(column_formats(header, resolution)) + "\n"
+    return [(row, table[start:start + TEXT_BLOCK_ROWS]) for start in range(0, len(table), TEXT_BLOCK_ROWS)]
+
+
+def _block_text(job: tuple) -> str:
+    """The CSV text of one block: a (row format, rows) pair of :func:`_block_jobs`."""
+    row, block = job
+    return (row * len(block)) % tuple(block.ravel().tolist())
+
+
+def _block_bytes(job: tuple) -> bytes:
+    """:func:`_block_text` encoded (ASCII), as written."""
+    return _block_text(job).encode()
+
+
 def table_blocks(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> Iterator[str]:
     """The CSV text of a table in blocks: the header row of column names, then :data:`TEXT_BLOCK_ROWS` rows
     (one per sample) at a time."""
-    table = np.asarray(table, float).reshape(-1, len(header))
-    row = ",".join(column_formats(header, resolution)) + "\n"
     yield ",".join(header) + "\n"
-    for start in range(0, len(table), TEXT_BLOCK_ROWS):
-        block = table[start:start + TEXT_BLOCK_ROWS]
-        yield (row * len(block)) % tuple(block.ravel().tolist())
+    yield from map(_block_text, _block_jobs(header, table, resolution))
 
 
 def table_text(header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> str:
@@ -72,25 +90,86 @@ def write_text(path: Path, text: str) -> None:
     Path(path).write_bytes(data)
 
 
-def write_table(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> None:
-    """Write the CSV text of a table (:func:`table_text`) to ``path``: the bytes of :func:`write_text`, but a
-    ``.gz`` table is compressed block by block in a second thread while the next block is formatted (zlib
-    releases the GIL; one gzip stream with a zero timestamp, as ``gzip.compress(..., mtime=0)`` writes it)."""
-    blocks = (block.encode() for block in table_blocks(header, table, resolution))
+def write_table(path: Path, header: tuple[str, ...], table: np.ndarray, resolution: dict[str, int] | None = None) -> str:
+    """Write the CSV text of a table (:func:`table_text`) to ``path``: the bytes of :func:`write_text` (see
+    :func:`write_tables`); returns the file's SHA-256 (hex)."""
+    return write_tables([(path, header, table, resolution)])[0]
+
+
+def write_tables(tables: list[tuple], workers: int = 1) -> list[str]:
+    """Write tables, each given as the arguments of :func:`write_table` (path, header, table, resolution), with
+    the bytes of :func:`write_text`; returns each file's SHA-256 (hex), taken from the bytes as they are written.
+
+    A ``.gz`` table is compressed block by block in a second thread while the next block is formatted (zlib
+    releases the GIL; one gzip stream with a zero timestamp, as ``gzip.compress(..., mtime=0)`` writes it).
+    With ``workers`` > 1 the blocks of all the tables are formatted by that many forked processes (formatting
+    exact text holds the GIL: it is most of the time) while this process compresses and writes them in order;
+    one process formats them where fork is not available or this process is itself a pool's worker.
+    """
+    jobs = [_block_jobs(header, table, resolution) for _path, header, table, resolution in tables]
+    every_job = [job for table_jobs in jobs for job in table_jobs]
+    pool = _fork_pool(min(workers, len(every_job)), every_job)
+    try:
+        blocks = pool.imap(_forked_block_bytes, range(len(every_job))) if pool else map(_block_bytes, every_job)
+        return [_write_blocks(path, chain([(",".join(header) + "\n").encode()], islice(blocks, len(table_jobs))))
+                for (path, header, _table, _resolution), table_jobs in zip(tables, jobs)]
+    finally:
+        if pool:
+            pool.terminate()
+
+
+def format_workers() -> int:
+    """Worker processes worth forking to format text (:func:`write_tables`): one per core this process may run
+    on, at most :data:`MAX_FORMAT_WORKERS`."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return min(cores, MAX_FORMAT_WORKERS)
+
+
+def _fork_pool(workers: int, jobs: list):
+    """A pool of ``workers`` forked processes that hold ``jobs`` (inherited, not pickled: a worker is sent job
+    numbers), or None (one worker, no fork, or a daemonic pool worker)."""
+    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods() or \
+            multiprocessing.current_process().daemon:
+        return None
+    return multiprocessing.get_context("fork").Pool(workers, initializer=_hold_jobs, initargs=(jobs,))
+
+
+_worker_jobs: list = []  # in a forked worker: the jobs of write_tables
+
+
+def _hold_jobs(jobs: list) -> None:
+    _worker_jobs[:] = jobs
+
+
+def _forked_block_bytes(number: int) -> bytes:
+    """:func:`_block_bytes` of job ``number`` held by this worker."""
+    return _block_bytes(_worker_jobs[number])
+
+
+def _write_blocks(path: Path, blocks) -> str:
+    """Write ``blocks`` (an iterable of bytes) to ``path``, gzip-compressed in a second thread for ``.gz``;
+    returns the SHA-256 (hex) of the bytes written."""
+    digest = hashlib.sha256()
     with open(path, "wb") as fh:
+        def write(data: bytes) -> None:
+            fh.write(data)
+            digest.update(data)
+
         if Path(path).suffix != ".gz":
-            fh.writelines(blocks)
-            return
+            for block in blocks:
+                write(block)
+            return digest.hexdigest()
         compressor = zlib.compressobj(GZIP_LEVEL, zlib.DEFLATED, 16 + zlib.MAX_WBITS)  # 16+: gzip container
         with ThreadPoolExecutor(max_workers=1) as pool:
             pending = None
-            for block in blocks:  # formats the next block while the pending one is compressed
+            for block in blocks:  # takes the next block while the pending one is compressed
                 if pending is not None:
-                    fh.write(pending.result())
+                    write(pending.result())
                 pending = pool.submit(compressor.compress, block)
             if pending is not None:
-                fh.write(pending.result())
-        fh.write(compressor.flush())
+                write(pending.result())
+        write(compressor.flush())
+    return digest.hexdigest()
 
 
 def open_text(path: Path):

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 from scipy.signal import butter, sosfreqz
 
+from gaitsim.imu import kernels, model
 from gaitsim.imu.model import SensorSpec, apply_sensor, mounting_rotation
-from gaitsim.imu.presets import get_preset
+from gaitsim.imu.presets import PRESET_NAMES, get_preset
 
 RATE = 800.0
 
@@ -81,6 +82,40 @@ def test_quantisation_step_equals_resolution():
     np.testing.assert_allclose(np.unique(np.round(steps[steps != 0], 12)), [resolution], rtol=1e-9)
     np.testing.assert_allclose(acc_m / resolution, np.round(acc_m / resolution), atol=1e-9)
     assert np.max(np.abs(acc_m - acc)) <= resolution / 2 + 1e-12
+
+
+def test_quantisation_and_clipping_are_numpys_round_and_clip_exactly():
+    """The compiled pass rounds halves to even and clips as np.round and np.clip do, bit for bit."""
+    resolution, limit = 0.0625, 2.0  # exact binary steps: k + 1/2 steps are exact halves
+    halves = (np.arange(-80, 80) + 0.5) * resolution
+    values = np.concatenate([halves, np.random.default_rng(3).uniform(-3.0, 3.0, 3 * 2000 - halves.size)])
+    acc = values.reshape(-1, 3)
+    t = np.arange(acc.shape[0]) / RATE
+    _, acc_m, _ = run(only(accel_resolution=resolution, accel_range=limit), t, acc, np.zeros_like(acc))
+    assert np.array_equal(acc_m, np.clip(np.round(acc / resolution) * resolution, -limit, limit))
+
+
+def every_term_on() -> SensorSpec:
+    return get_preset("paper-vn200").replace(
+        name="all terms", gyro_random_walk=1e-5, accel_random_walk=1e-4, gyro_bias_repeatability=1e-3,
+        accel_bias_repeatability=1e-2, gyro_g2_sensitivity=np.full((3, 3), 1e-7), gyro_resolution=1e-4,
+        accel_resolution=1e-3, gyro_bandwidth=250.0, accel_bandwidth=250.0, accel_temp_bias=1e-4,
+        gyro_temp_bias=1e-5, accel_temp_scale=1e-4, gyro_temp_scale=1e-4, temperature=[20.0, 30.0],
+        clock_error=50e-6, timestamp_jitter=1e-6, accel_gyro_skew=2e-4, mounting_misalignment=[0.01, -0.02, 0.03],
+        gyro_bias_instability_tau=0.1)
+
+
+@pytest.mark.parametrize("spec", [get_preset(name) for name in PRESET_NAMES] + [every_term_on()],
+                         ids=[*PRESET_NAMES, "all-terms"])
+def test_compiled_kernels_and_numpy_reference_give_the_same_bits(spec, monkeypatch):
+    t, acc, gyr = walking_like_truth(n=20_011)
+    outputs = []
+    for implementation in (kernels, model):
+        monkeypatch.setattr(model, "_implementation", lambda n, chosen=implementation: chosen)
+        outputs.append(run(spec, t, acc, gyr, seed=4))
+    assert all(np.array_equal(a, b) for a, b in zip(*outputs))
+    if spec.name != "ideal":
+        assert not np.array_equal(outputs[0][1], acc)
 
 
 def test_saturation_clips_exactly_at_range():

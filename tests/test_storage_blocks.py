@@ -16,7 +16,8 @@ HEADER = ("t", "pos_x", "acc_x")
 def test_written_table_is_the_table_text(tmp_path, rows, form):
     table = np.random.default_rng(rows).normal(size=(rows, 3)) * [1.0, 100.0, 1e-7]
     path = tmp_path / f"table.{form}"
-    storage.write_table(path, HEADER, table, {"pos": 9})
+    digest = storage.write_table(path, HEADER, table, {"pos": 9})
+    assert digest == storage.sha256(path)
     text = storage.table_text(HEADER, table, {"pos": 9})
     data = path.read_bytes()
     if form == "csv.gz":
@@ -25,3 +26,17 @@ def test_written_table_is_the_table_text(tmp_path, rows, form):
     else:
         assert data.decode() == text
     assert text.count("\n") == rows + 1
+
+
+@pytest.mark.parametrize("form", storage.FORMS)
+def test_tables_formatted_by_forked_workers_have_the_same_bytes(tmp_path, form):
+    rng = np.random.default_rng(5)
+    tables = [rng.normal(size=(rows, 3)) * [1.0, 100.0, 1e-7] for rows in (3 * storage.TEXT_BLOCK_ROWS + 7, 0, 11)]
+    written = {}
+    for workers in (1, 2, 3):
+        paths = [tmp_path / f"w{workers}-{i}.{form}" for i in range(len(tables))]
+        storage.write_tables([(path, HEADER, table, {"pos": 9}) for path, table in zip(paths, tables)], workers)
+        written[workers] = [path.read_bytes() for path in paths]
+    assert written[1] == written[2] == written[3]
+    text = storage.table_text(HEADER, tables[0], {"pos": 9})
+    assert (gzip.decompress(written[2][0]) if form == "csv.gz" else written[2][0]).decode() == text

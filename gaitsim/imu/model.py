@@ -30,7 +30,8 @@ default value):
    coarse step ``h`` (16 samples, or ``tau_c / 20`` if shorter) and linearly interpolated to the samples;
    their spectra differ from the continuous processes only above ``1 / (2 h)``, where white noise
    dominates by orders of magnitude.
-   **White noise**: sample std ``N sqrt(fs)`` (noise density N), from float32 standard normals.
+   **White noise**: sample std ``N sqrt(fs)`` (noise density N), from float32 standard normals (numpy's,
+   drawn in a compiled loop: :mod:`gaitsim.imu.normals`).
 6. **Bandwidth**: a Butterworth low-pass of order ``filter_order`` and cutoff ``*_bandwidth`` (digital,
    bilinear, at the output rate) acting on the sum above, started in steady state on the first sample so a
    static start has no transient.
@@ -44,11 +45,11 @@ the realisation of the others, and a seeded run is reproducible.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
 
 from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
@@ -98,6 +99,7 @@ _POSITIVE = ("_tau", "_range", "_bandwidth")
 RANDOM_STREAMS = ("accel_turn_on", "gyro_turn_on", "accel_instability", "gyro_instability",
                   "accel_random_walk", "gyro_random_walk", "accel_white", "gyro_white", "timestamp_jitter")
 SLOW_PROCESS_STEP = 16  # samples between nodes of the simulated bias-instability / random-walk processes
+COMPILED_FROM_SAMPLES = 1_000_000  # records this long take the compiled kernels even when numba is not loaded yet
 
 
 def _as_parameter(name: str, value) -> np.ndarray:
@@ -211,53 +213,67 @@ def _gauss_markov_std_per_instability() -> float:
     return BIAS_INSTABILITY_FLOOR / GAUSS_MARKOV_PEAK[1]
 
 
-# ---------------------------------------------------------------------------------------------- pieces
+# ------------------------------------------------------------- numpy reference of gaitsim.imu.kernels
 
 
-@njit(cache=True)
-def _add_interpolated(out: np.ndarray, nodes: np.ndarray, node_step: int) -> None:
-    """out[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at sample k."""
-    for k in range(out.shape[0]):
-        j = k // node_step
-        frac = (k - j * node_step) / node_step
-        for c in range(3):
-            out[k, c] += nodes[j, c] + frac * (nodes[j + 1, c] - nodes[j, c])
-
-
-@njit(cache=True)
-def _first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
+def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
     """(J+1, 3) nodes of the recursion nodes[0] = first, nodes[j+1] = decay nodes[j] + steps[j] (``steps`` (J, 3)):
     the arithmetic of scipy's ``lfilter([1], [1, -decay], steps, zi=decay * first)`` after ``first``."""
-    nodes = np.empty((steps.shape[0] + 1, 3))
-    nodes[0] = first
-    for j in range(steps.shape[0]):
-        for c in range(3):
-            nodes[j + 1, c] = decay * nodes[j, c] + steps[j, c]
-    return nodes
+    decay = float(decay)
+    columns = []
+    for axis in range(3):  # Python floats: the same IEEE operations, axis by axis
+        value = float(first[axis])
+        column = [value]
+        for change in steps[:, axis].tolist():
+            value = decay * value + change
+            column.append(value)
+        columns.append(column)
+    return np.ascontiguousarray(np.array(columns).T)
 
 
-@njit(cache=True)
-def _add_scaled(out: np.ndarray, draws: np.ndarray, scale: np.ndarray) -> None:
-    """out[k, c] += draws[k, c] * scale[c] (no temporary array)."""
-    for k in range(out.shape[0]):
-        for c in range(3):
-            out[k, c] += draws[k, c] * scale[c]
+def add_stochastic_terms(out: np.ndarray, signal: np.ndarray, instability: tuple, walk: tuple,
+                         white_std: np.ndarray, rng: np.random.Generator, resolution: float, limit: float) -> None:
+    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each a pair
+    (nodes (J, 3), node_step), linearly interpolated between the nodes; no nodes: off) + white noise of
+    per-axis std ``white_std`` (3,) (float32 normals from ``rng``; all zero: off), then quantised and clipped
+    (:func:`quantise_and_clip`), each sum rounded in this order."""
+    if out is not signal:
+        out[:] = signal
+    samples = np.arange(out.shape[0])
+    for nodes, node_step in (instability, walk):
+        if nodes.shape[0]:
+            node = samples // node_step
+            frac = ((samples - node * node_step) / node_step)[:, None]
+            before = nodes[node]
+            out += before + frac * (nodes[node + 1] - before)
+    if np.any(white_std):
+        out += rng.standard_normal(out.shape, dtype=np.float32) * white_std
+    quantise_and_clip(out, resolution, limit)
 
 
-WHITE_NOISE_CHUNK = 32768  # samples per block of white-noise draws (a cache-sized, reused buffer)
+def quantise_and_clip(x: np.ndarray, resolution: float, limit: float) -> None:
+    """Round ``x`` to multiples of ``resolution`` (0: off; halves to even), then clip at +-``limit`` (inf:
+    off); in place."""
+    if resolution > 0:
+        np.divide(x, resolution, out=x)
+        np.round(x, out=x)
+        np.multiply(x, resolution, out=x)
+    if np.isfinite(limit):
+        np.clip(x, -limit, limit, out=x)
 
 
-def add_white_noise(out: np.ndarray, sample_std: np.ndarray, rng: np.random.Generator) -> None:
-    """Add white noise of per-axis sample std ``sample_std`` (3,) to ``out`` (n, 3) in place.
+def _implementation(n: int):
+    """Where the stochastic terms are computed for a record of n samples: the compiled kernels
+    (:mod:`gaitsim.imu.kernels`) for a long record or once numba is loaded, else this module's numpy reference
+    (numba's first use in a process costs more than a short record's sensor stage). Both give the same bits."""
+    if n >= COMPILED_FROM_SAMPLES or "numba" in sys.modules:
+        from gaitsim.imu import kernels
 
-    Draws are float32 standard normals (24-bit resolution, ample for noise), taken in blocks into one
-    reused buffer; the sequence is the same as one ``rng.standard_normal((n, 3), dtype=float32)`` call.
-    """
-    buffer = np.empty((min(WHITE_NOISE_CHUNK, out.shape[0]), 3), dtype=np.float32)
-    for start in range(0, out.shape[0], WHITE_NOISE_CHUNK):
-        block = buffer[: min(WHITE_NOISE_CHUNK, out.shape[0] - start)]
-        rng.standard_normal(out=block, dtype=np.float32)
-        _add_scaled(out[start:start + block.shape[0]], block, sample_std)
+        return kernels
+    return sys.modules[__name__]
+
+
+# ---------------------------------------------------------------------------------------------- pieces
 
 
 def _node_count(n: int, node_step: int) -> int:
@@ -265,36 +281,43 @@ def _node_count(n: int, node_step: int) -> int:
     return (n - 1) // node_step + 2
 
 
-def add_gauss_markov_bias(out: np.ndarray, dt: float, instability: np.ndarray, tau_c: float,
-                          rng: np.random.Generator) -> None:
-    """Add a bias-instability process to ``out`` (n, 3) in place: first-order Gauss-Markov, stationary from
-    the start, simulated exactly on nodes and linearly interpolated (module docstring, step 5).
+def gauss_markov_nodes(n: int, dt: float, instability: np.ndarray, tau_c: float, rng: np.random.Generator,
+                       recursion=first_order_recursion) -> tuple[np.ndarray, int]:
+    """Nodes of a bias-instability process for n samples: first-order Gauss-Markov, stationary from the
+    start, simulated exactly at every ``node_step``-th sample (module docstring, step 5).
 
     Parameters
     ----------
-    out : (n, 3) signal, unit of ``instability``.
+    n : samples to cover.
     dt : sample interval, s.
-    instability : (3,) datasheet bias instability B.
+    instability : (3,) datasheet bias instability B (signal unit).
     tau_c : correlation time, s.
     rng : the term's own Generator.
+    recursion : :func:`first_order_recursion` or its compiled twin (the same nodes).
+
+    Returns
+    -------
+    nodes : (J, 3) process values at samples 0, node_step, 2 node_step, ... (J >= (n - 1) // node_step + 2).
+    node_step : samples between nodes.
     """
     node_step = int(max(1, min(SLOW_PROCESS_STEP, np.floor(tau_c / (20.0 * dt)))))
     sigma = _gauss_markov_std_per_instability() * np.asarray(instability)
     decay = np.exp(-node_step * dt / tau_c)
-    draws = rng.standard_normal((_node_count(out.shape[0], node_step), 3))
+    draws = rng.standard_normal((_node_count(n, node_step), 3))
     first = draws[0] * sigma
     steps = draws[1:] * (sigma * np.sqrt(1.0 - decay**2))
-    nodes = _first_order_recursion(first, steps, decay)
-    _add_interpolated(out, nodes, node_step)
+    return recursion(first, steps, decay), node_step
 
 
-def add_random_walk_bias(out: np.ndarray, dt: float, walk: np.ndarray, rng: np.random.Generator) -> None:
-    """Add a rate-random-walk bias starting at zero to ``out`` (n, 3) in place; ``walk`` (3,) is K in
-    (signal unit)/sqrt(s); simulated exactly on nodes and linearly interpolated."""
+def random_walk_nodes(n: int, dt: float, walk: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, int]:
+    """Nodes (J, 3) and node step of a rate-random-walk bias starting at zero, for n samples; ``walk`` (3,)
+    is K in (signal unit)/sqrt(s); simulated exactly at the nodes (see :func:`gauss_markov_nodes`)."""
     node_step = SLOW_PROCESS_STEP
-    steps = rng.standard_normal((_node_count(out.shape[0], node_step) - 1, 3)) * (np.asarray(walk) * np.sqrt(node_step * dt))
-    nodes = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
-    _add_interpolated(out, nodes, node_step)
+    steps = rng.standard_normal((_node_count(n, node_step) - 1, 3)) * (np.asarray(walk) * np.sqrt(node_step * dt))
+    return np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)]), node_step
+
+
+_NO_NODES = (np.zeros((0, 3)), 1)  # a slow process that is off
 
 
 def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
@@ -309,17 +332,6 @@ def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.
     sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
     zi = sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
     return sosfilt(sos, x, axis=0, zi=zi)[0]
-
-
-def quantise_and_clip(x: np.ndarray, resolution: float, limit: float) -> np.ndarray:
-    """Round to multiples of ``resolution`` (0: off), then clip at ``+-limit`` (inf: off); in place."""
-    if resolution > 0:
-        np.divide(x, resolution, out=x)
-        np.round(x, out=x)
-        np.multiply(x, resolution, out=x)
-    if np.isfinite(limit):
-        np.clip(x, -limit, limit, out=x)
-    return x
 
 
 def mounting_rotation(roll_pitch_yaw: np.ndarray) -> np.ndarray:
@@ -413,7 +425,7 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
                if np.any(p[f"{s}_bias_repeatability"]) else np.zeros(3) for s in ("accel", "gyro")}
     deterministic = spec.deterministic(turn_on["accel"], turn_on["gyro"])
     if _is_identity(deterministic):
-        acc_m, gyr_m = acc.copy(), gyr.copy()
+        acc_m, gyr_m = acc, gyr  # not copied: step 5 writes the output arrays (a pass over memory saved)
     else:
         acc_m, gyr_m = deterministic.distort(acc, gyr)
 
@@ -421,23 +433,37 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
     scale_on = np.any(p["accel_temp_scale"]) or np.any(p["gyro_temp_scale"])
     bias_on = np.any(p["accel_temp_bias"]) or np.any(p["gyro_temp_bias"])
     if scale_on or bias_on:
+        if acc_m is acc:
+            acc_m, gyr_m = acc.copy(), gyr.copy()
         delta = (_temperature_at(spec, temperature, t, instants) - p["temperature_ref"])[:, None]
         for out, bias, s in ((acc_m, deterministic.b_a, "accel"), (gyr_m, deterministic.b_g, "gyro")):
             out += (out - bias) * (p[f"{s}_temp_scale"] * delta) + p[f"{s}_temp_bias"] * delta
 
-    # 5.-7. stochastic terms, bandwidth, quantisation and saturation
-    for out, s in ((acc_m, "accel"), (gyr_m, "gyro")):
+    # 5.-7. stochastic terms, bandwidth, quantisation and saturation: one pass unless a bandwidth is on
+    implementation = _implementation(n)
+    measured = []
+    for signal, s in ((acc_m, "accel"), (gyr_m, "gyro")):
+        instability, walk = _NO_NODES, _NO_NODES
         if np.any(p[f"{s}_bias_instability"]):
-            add_gauss_markov_bias(out, dt, p[f"{s}_bias_instability"], float(p[f"{s}_bias_instability_tau"]),
-                                  streams[f"{s}_instability"])
+            instability = gauss_markov_nodes(n, dt, p[f"{s}_bias_instability"], float(p[f"{s}_bias_instability_tau"]),
+                                             streams[f"{s}_instability"], implementation.first_order_recursion)
         if np.any(p[f"{s}_random_walk"]):
-            add_random_walk_bias(out, dt, p[f"{s}_random_walk"], streams[f"{s}_random_walk"])
-        if np.any(p[f"{s}_noise_density"]):
-            add_white_noise(out, np.asarray(p[f"{s}_noise_density"] * np.sqrt(rate_hz)), streams[f"{s}_white"])
-    if np.isfinite(p["accel_bandwidth"]):
-        acc_m = low_pass(acc_m, float(p["accel_bandwidth"]), rate_hz, spec.filter_order)
-    if np.isfinite(p["gyro_bandwidth"]):
-        gyr_m = low_pass(gyr_m, float(p["gyro_bandwidth"]), rate_hz, spec.filter_order)
-    quantise_and_clip(acc_m, float(p["accel_resolution"]), float(p["accel_range"]))
-    quantise_and_clip(gyr_m, float(p["gyro_resolution"]), float(p["gyro_range"]))
+            walk = random_walk_nodes(n, dt, p[f"{s}_random_walk"], streams[f"{s}_random_walk"])
+        white_std = np.asarray(p[f"{s}_noise_density"] * np.sqrt(rate_hz))
+        bandwidth, resolution, limit = (float(p[f"{s}_{name}"]) for name in ("bandwidth", "resolution", "range"))
+        filtered = np.isfinite(bandwidth)
+        resolution_now, limit_now = (0.0, np.inf) if filtered else (resolution, limit)  # else after the filter
+        given = signal is acc or signal is gyr  # an input array: never written, the output is a new array
+        if instability is _NO_NODES and walk is _NO_NODES and not np.any(white_std) and not resolution_now and \
+                limit_now == np.inf:
+            out = signal.copy() if given else signal  # nothing to add
+        else:
+            out = np.empty_like(signal) if given else signal
+            implementation.add_stochastic_terms(out, signal, instability, walk, white_std, streams[f"{s}_white"],
+                                                resolution_now, limit_now)
+        if filtered:
+            out = low_pass(out, bandwidth, rate_hz, spec.filter_order)
+            implementation.quantise_and_clip(out, resolution, limit)
+        measured.append(out)
+    acc_m, gyr_m = measured
     return t_meas, acc_m, gyr_m

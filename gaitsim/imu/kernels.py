@@ -1,0 +1,104 @@
+"""Compiled kernels of the IMU model (numba): the stochastic terms, quantisation and clipping in one pass, and
+the nodes of the bias-instability recursion.
+
+:mod:`gaitsim.imu.model` uses them for long records, or when numba is already loaded; its numpy path is the
+reference, and both give the same bits (``tests/test_imu_model.py``). This module is imported only then:
+numba's first use in a process costs about half a second (its import and the loading of its registries),
+more than a short record's whole sensor stage.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from gaitsim.imu.normals import bit_words, standard_normal
+
+
+@njit(cache=True, inline="always")
+def _quantised(value, resolution, limit):
+    """``value`` rounded to a multiple of ``resolution`` (0: off; halves to even, like np.round), then
+    clipped at +-``limit`` (inf: off)."""
+    if resolution > 0:
+        value = np.round(value / resolution) * resolution
+    return min(max(value, -limit), limit)
+
+
+STOCHASTIC_BLOCK = 4096  # samples summed at a time in a cache-resident buffer
+
+
+@njit(cache=True)
+def _add_interpolated(block, nodes, node_step, node, offset):
+    """block[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at the samples of
+    the block, the first of which lies ``offset`` samples after node ``node``; returns (node, offset) of the
+    sample after the block."""
+    for k in range(block.shape[0]):
+        frac = offset / node_step
+        for c in range(3):
+            before = nodes[node, c]
+            block[k, c] += before + frac * (nodes[node + 1, c] - before)
+        offset += 1
+        if offset == node_step:
+            node, offset = node + 1, 0
+    return node, offset
+
+
+@njit(cache=True)
+def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk_nodes, walk_step, white_std,
+                          next_uint32, state, resolution, limit):
+    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each linearly
+    interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white noise of std
+    ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and ``limit``
+    inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it; the
+    terms are added a block at a time in a cache-resident buffer, each in its own simple loop."""
+    white = white_std[0] != 0.0 or white_std[1] != 0.0 or white_std[2] != 0.0
+    finish = resolution > 0.0 or limit < np.inf
+    buffer = np.empty((STOCHASTIC_BLOCK, 3))
+    instability_at = walk_at = (0, 0)  # (node before the block's first sample, its offset from that node)
+    for start in range(0, out.shape[0], STOCHASTIC_BLOCK):
+        stop = min(out.shape[0], start + STOCHASTIC_BLOCK)
+        block = buffer[: stop - start]
+        block[:] = signal[start:stop]
+        if instability_nodes.shape[0]:
+            instability_at = _add_interpolated(block, instability_nodes, instability_step, *instability_at)
+        if walk_nodes.shape[0]:
+            walk_at = _add_interpolated(block, walk_nodes, walk_step, *walk_at)
+        if white:
+            for k in range(block.shape[0]):
+                for c in range(3):
+                    block[k, c] += float(standard_normal(next_uint32, state)) * white_std[c]
+        if finish:
+            for k in range(block.shape[0]):
+                for c in range(3):
+                    block[k, c] = _quantised(block[k, c], resolution, limit)
+        out[start:stop] = block
+
+
+@njit(cache=True)
+def quantise_and_clip(x, resolution, limit):
+    """Round ``x`` (n, 3) to multiples of ``resolution`` (0: off), then clip at +-``limit`` (inf: off); in place."""
+    for k in range(x.shape[0]):
+        for c in range(3):
+            x[k, c] = _quantised(x[k, c], resolution, limit)
+
+
+@njit(cache=True)
+def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) -> np.ndarray:
+    """(J+1, 3) nodes of the recursion nodes[0] = first, nodes[j+1] = decay nodes[j] + steps[j] (``steps`` (J, 3)):
+    the arithmetic of scipy's ``lfilter([1], [1, -decay], steps, zi=decay * first)`` after ``first``."""
+    nodes = np.empty((steps.shape[0] + 1, 3))
+    nodes[0] = first
+    for j in range(steps.shape[0]):
+        for c in range(3):
+            nodes[j + 1, c] = decay * nodes[j, c] + steps[j, c]
+    return nodes
+
+
+def add_stochastic_terms(out, signal, instability, walk, white_std, rng, resolution, limit) -> None:
+    """``out`` = ``signal`` + bias instability + random walk (each ``(nodes, node_step)``; no nodes: off) +
+    white noise of per-axis std ``white_std`` drawn from ``rng``, then quantised and clipped (see
+    :func:`_add_stochastic_terms`); ``out`` may be ``signal``."""
+    with bit_words(rng) as (next_uint32, state):
+        _add_stochastic_terms(out, signal, *instability, *walk, np.asarray(white_std, float), next_uint32, state,
+                              resolution, limit)
+
