@@ -237,21 +237,20 @@ class Fit:
                 and not self.at_bound)
 
 
-def fit_effect(simulate: tw.TwinSimulator, name: str, twin: tw.Twin, measured: Side, base: dict, acted: str,
-               ctx: dict, noise: dict) -> Fit:
-    """Fit the magnitude of the library effect ``name`` (module docstring, step 4) and measure what it explains of
-    ``acted`` (one of the residuals it moves: the fit itself does not depend on which).
+def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, ctx: dict,
+               noise: dict) -> Fit:
+    """Fit ``effect``'s magnitude to the twin (module docstring, step 4); :func:`judged` then measures what it
+    explains of the residual acted on (the fit itself does not depend on which).
 
     An effect whose direction comes from the residuals (``Effect.refine``) is fitted again with the context
     (:func:`gaitsim.loop.effects.context`) of its first fit, and the better of the two fits is kept."""
-    effect = fx.library_effect(name)
     fit = _fit_magnitude(simulate, effect, twin, measured, base, ctx, noise)
     if effect.refine and fit.side is not None:
         refined = fx.context(measured.recording, twin.with_changes(fit.changes).scenario, measured.signature,
                              fit.side.signature)
         again = _fit_magnitude(simulate, effect, twin, measured, base, refined, noise)
         fit = again if again.q_after < fit.q_after else fit
-    return judged(fit, base, acted)
+    return fit
 
 
 def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict,
@@ -453,12 +452,12 @@ def _run_loop(rec: Recording, max_rounds: int, progress: Progress, axis_map: str
         ctx = fx.context(rec, current_twin.scenario, measured.signature, current_side.signature)
         candidates = [e for e in fx.LIBRARY if acted.name in e.moves and e.name not in used and fx.applicable(e, ctx)]
         progress.stage(f"round {round_number}, {acted.name} (z = {acted.z:.1f})", len(candidates))
-        new = [e.name for e in candidates if e.name not in fitted]
+        new = [e for e in candidates if e.name not in fitted]
         for _ in range(len(candidates) - len(new)):
             progress.step("effects fitted (on this twin in an earlier round)")
         n = len(new)
-        for fit in workers.map(fit_effect, new, [current_twin] * n, [measured] * n, [current] * n, [acted.name] * n,
-                               [ctx] * n, [noise] * n):
+        for fit in workers.map(fit_effect, new, [current_twin] * n, [measured] * n, [current] * n, [ctx] * n,
+                               [noise] * n):
             fitted[fit.effect.name] = fit
             progress.step(f"effects fitted ({fit.effect.name})")
         fits = [judged(fitted[e.name], current, acted.name) for e in candidates]

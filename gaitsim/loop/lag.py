@@ -73,10 +73,10 @@ def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.nd
     t : (N,) s; acc : (N, 3) m/s^2 specific force; gyr : (N, 3) rad/s.
     stances : (m, 2) sample indices [start, end) of the detected stances of regular strides.
     """
-    rate = 1.0 / float(np.median(np.diff(t)))
+    rate = 1.0 / float(np.median(np.diff(t)))  # the samples read are taken as evenly spaced at the median rate
     n = max(3, int(round(settings.PUSH_OFF_S * rate)))
     margin = int(math.ceil(settings.LAG_RANGE_MS / 1000.0 * rate)) + 2
-    quiet = max(1, int(round(QUIET_S * rate)))  # the samples read are taken as evenly spaced at the median rate
+    quiet = max(1, int(round(QUIET_S * rate)))
     ends = stances[:, 1]
     ends = ends[(ends - margin - quiet >= stances[:, 0]) & (ends + n + margin < len(t))]
     if len(ends) < 3:
