@@ -68,16 +68,16 @@ class Piecewise:
         inside = (t >= self.t0) & (t <= self.t1)
         if inside.any():
             ti = t[inside]
-            if self._interior.size:
+            if self._interior.size:  # each row of coefficients gathered for the samples as Horner needs it
                 piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
                 local = ti - self._left[piece]
-                coef = self._coef[:, :, piece]  # (k+1, 5, n)
+                coef = (np.take(row, piece, axis=1) for row in self._coef)  # (5, n) each
             else:  # one piece: its coefficients broadcast over the samples
                 local = ti - self._left[0]
-                coef = self._coef  # (k+1, 5, 1)
+                coef = iter(self._coef)  # (5, 1) each
             value = np.empty((NDER, ti.size))
-            value[:] = coef[0]
-            for c in coef[1:]:
+            value[:] = next(coef)
+            for c in coef:
                 value *= local
                 value += c
             out[:, inside] = value
