@@ -70,45 +70,108 @@ class Piecewise:
             ti = t[inside]
             if self._interior.size:  # each row of coefficients gathered for the samples as Horner needs it
                 piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
-                local = ti - self._left[piece]
-                coef = (np.take(row, piece, axis=1) for row in self._coef)  # (5, n) each
+                out[:, inside] = _horner(self._coef, piece, ti - self._left[piece])
             else:  # one piece: its coefficients broadcast over the samples
-                local = ti - self._left[0]
-                coef = iter(self._coef)  # (5, 1) each
-            value = np.empty((NDER, ti.size))
-            value[:] = next(coef)
-            for c in coef:
-                value *= local
-                value += c
-            out[:, inside] = value
+                out[:, inside] = _horner(self._coef, None, ti - self._left[0])
         out[0, t < self.t0] = self.before
         out[0, t > self.t1] = self.after
         return out
 
 
-def accumulate(out: np.ndarray, t: np.ndarray, t0: float, t1: float, stack) -> None:
-    """``out += stack(t)`` in place, evaluating ``stack`` only on the samples in [t0, t1] and one on each side.
+def _horner(coef: np.ndarray, piece: np.ndarray | None, local: np.ndarray) -> np.ndarray:
+    """(5, n) derivative stacks from the derivative coefficient table ``coef`` (k+1, 5, m) (highest power
+    first) of piece ``piece[i]`` (None: the only piece) at ``local[i]`` s from its left end: one Horner pass,
+    each row of coefficients gathered for the samples as it is needed."""
+    rows = iter(coef) if piece is None else (np.take(row, piece, axis=1) for row in coef)
+    value = np.empty((NDER, local.size))
+    value[:] = next(rows)
+    for c in rows:
+        value *= local
+        value += c
+    return value
 
-    For a function held constant outside [t0, t1] (derivatives zero there), e.g. a :class:`Piecewise` or a sum
-    of them: each outside sample gets the same row-0 value added as its neighbour beyond the window, rows 1..4
-    outside are left alone. That equals ``out += stack(t)`` bit for bit whenever rows 1..4 of ``out`` hold no
-    -0.0 (adding +0.0 changes nothing else), as in any sum started from ``np.zeros``.
+
+class PieceTable:
+    """Many :class:`Piecewise` functions of the same degree packed for one evaluation in which every sample
+    names its function: the stacks of each, bit for bit, in a handful of numpy calls instead of a handful per
+    function.
+
+    Parameters
+    ----------
+    functions : sequence of Piecewise, all with the same number of coefficients per piece.
+    """
+
+    def __init__(self, functions):
+        orders = {f.coef.shape[0] for f in functions}
+        if len(orders) != 1:
+            raise ValueError(f"a PieceTable packs functions of one degree; got {len(orders)} ({sorted(orders)})")
+        self._coef = np.concatenate([f._coef for f in functions], axis=2)  # (k+1, 5, pieces of all)
+        self._left = np.concatenate([f._left for f in functions])
+        counts = np.array([f.coef.shape[1] for f in functions])
+        self._first = np.concatenate([[0], np.cumsum(counts)[:-1]])  # each function's first piece
+        # interior breakpoints of each function, padded with +inf: (functions, most pieces - 1)
+        self._interior = np.full((len(functions), counts.max() - 1), np.inf)
+        for i, f in enumerate(functions):
+            self._interior[i, :f._interior.size] = f._interior
+        self.t0 = np.array([f.t0 for f in functions])
+        self.t1 = np.array([f.t1 for f in functions])
+        self.before = np.array([f.before for f in functions])
+        self.after = np.array([f.after for f in functions])
+
+    def stack(self, t: np.ndarray, function: np.ndarray) -> np.ndarray:
+        """(5, N) derivative stacks at times ``t`` (N,) s, sample i of function ``function[i]``: what that
+        function's :meth:`Piecewise.stack` gives there."""
+        out = np.zeros((NDER, t.size))
+        t0, t1 = self.t0[function], self.t1[function]
+        inside = (t >= t0) & (t <= t1)
+        if inside.any():
+            ti, fi = t[inside], function[inside]
+            # interior breakpoints <= t (Piecewise's searchsorted side="right"): the last piece includes its end
+            piece = self._first[fi] + (ti[:, None] >= self._interior[fi]).sum(axis=1)
+            out[:, inside] = _horner(self._coef, piece, ti - self._left[piece])
+        before, after = t < t0, t > t1
+        out[0, before] = self.before[function[before]]
+        out[0, after] = self.after[function[after]]
+        return out
+
+
+def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
+    """Add K functions, each held constant outside its own window [t0[j], t1[j]] (derivatives zero there), to
+    ``out`` in turn, evaluating each only on the samples in its window.
+
+    The windows are disjoint and in increasing order. Inside its window a function's stack is added; outside,
+    row 0 gets its held value: after the window always, before it unless that value is +0.0 (adding +0.0 to a
+    number that is not -0.0 changes nothing). Each sample gets the held values and the stacks in the order of
+    the functions, so the result equals ``for j: out += stack_j(t)`` bit for bit whenever ``out`` holds no
+    -0.0, as in any sum started from ``np.zeros``.
 
     Parameters
     ----------
     out : (..., 5, N) derivative stacks, updated in place.
     t : (N,) s, increasing sample times.
-    t0, t1 : s, the window outside which the function is constant.
-    stack : callable mapping (n,) times (s) to (..., 5, n) derivative stacks.
+    t0, t1 : (K,) or scalar, s: the windows outside which the functions are constant.
+    stack : callable mapping times (n,) s and the function of each (n,) int (0 to K-1) to (..., 5, n)
+        derivative stacks.
     """
+    t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
+    if np.any(t0[1:] <= t1[:-1]):
+        raise ValueError("accumulate: the windows must be disjoint and in increasing order")
+    k = t0.size
+    if k == 0:
+        return
     lo, hi = np.searchsorted(t, t0, side="left"), np.searchsorted(t, t1, side="right")
-    first, last = max(lo - 1, 0), min(hi + 1, t.size)
-    part = stack(t[first:last])
-    out[..., lo:hi] += part[..., lo - first:hi - first]
-    if lo > 0:
-        out[..., 0, :lo] += part[..., 0, :1]
-    if hi < t.size:
-        out[..., 0, hi:] += part[..., 0, -1:]
+    inside = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi)])
+    functions = np.arange(k)
+    # each function once just before and once just after its window (its held values), then on its window
+    part = stack(np.concatenate([np.nextafter(t0, -np.inf), np.nextafter(t1, np.inf), t[inside]]),
+                 np.concatenate([functions, functions, np.repeat(functions, hi - lo)]))
+    before, after = part[..., 0, :k], part[..., 0, k:2 * k]
+    for j in np.flatnonzero(hi < t.size):  # a sample adds the held values of the windows before it, in order
+        out[..., 0, hi[j]:] += after[..., j:j + 1]
+    out[..., inside] += part[..., 2 * k:]
+    held_before = (before != 0.0) | np.signbit(before)
+    for j in np.flatnonzero(np.any(held_before.reshape(-1, k), axis=0) & (lo > 0)):  # then the later ones'
+        out[..., 0, :lo[j]] += before[..., j:j + 1]
 
 
 def _hermite_tail() -> np.ndarray:
