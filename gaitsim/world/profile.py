@@ -183,39 +183,28 @@ class StancePieces:
 
     Parameters
     ----------
-    n_stances : number of stances of the walk.
     stances : (M,) int, the stances that have a function, increasing.
     functions : M :class:`smooth.Piecewise` of the same degree (packed in one :class:`smooth.PieceTable`), or
         M lists of other functions with a ``stack(t)`` method (e.g. :class:`smooth.Ringing`), evaluated one by
         one.
     """
 
-    def __init__(self, n_stances: int, stances, functions: list):
+    def __init__(self, stances, functions: list):
         self.stances = np.asarray(stances, int)
-        self.slot = np.full(n_stances, -1)
-        self.slot[self.stances] = np.arange(self.stances.size)
         self.functions = functions
         self.table = smooth.PieceTable(functions) if isinstance(functions[0], smooth.Piecewise) else None
 
-    def stack(self, t: np.ndarray, stance: np.ndarray) -> np.ndarray:
-        """(5, N) stacks at times ``t`` (N,) s of the functions of the stances ``stance`` (N,) int (zero for a
-        stance without one)."""
-        out = np.zeros((smooth.NDER, t.size))
-        self.add_to(out, t, stance)
-        return out
-
     def add_to(self, out: np.ndarray, t: np.ndarray, stance: np.ndarray) -> None:
-        """``out`` (5, N) += the stacks at times ``t`` (N,) s of the functions of the stances ``stance`` (N,)
-        int, non-decreasing; samples of a stance without a function are left alone."""
-        slot = self.slot[stance]
+        """``out`` (5, N) += the stacks at increasing times ``t`` (N,) s of the functions of the stances
+        ``stance`` (N,) int, non-decreasing; samples of a stance without a function are left alone."""
+        start = np.searchsorted(stance, self.stances, side="left")
+        stop = np.searchsorted(stance, self.stances, side="right")
         if self.table is not None:
-            has = slot >= 0
-            out[:, has] += self.table.stack(t[has], slot[has])
+            self.table.add_to(out, t, start, stop)
             return
-        for k, pieces in zip(self.stances, self.functions):
-            rows = slice(*np.searchsorted(stance, [k, k + 1]))
+        for a, b, pieces in zip(start, stop, self.functions):
             for piece in pieces:
-                out[:, rows] += piece.stack(t[rows])
+                out[:, a:b] += piece.stack(t[a:b])
 
 
 class FootTrajectory:
@@ -251,17 +240,17 @@ class FootTrajectory:
         self.contact: list[list[StancePieces]] = [[] for _ in range(3)]
         if n:
             for a in range(3):
-                self.contact[a].append(StancePieces(n + 1, strikes, [
+                self.contact[a].append(StancePieces(strikes, [
                     smooth.hermite([plan.t_ic[k], plan.t_ic[k] + imp.heel_strike_duration_s],
                                    [[0, v_hs[a], 0, 0, 0], [self.compression[a], 0, 0, 0, 0]]) for k in strikes]))
             if imp.ringing_hz > 0 and imp.ringing_accel_mps2 != 0:
-                self.contact[2].append(StancePieces(n + 1, strikes, [
+                self.contact[2].append(StancePieces(strikes, [
                     [smooth.Ringing(t_event, imp.ringing_hz, imp.ringing_damping, imp.ringing_accel_mps2)
                      for t_event in (plan.t_ic[k], plan.t_ff[k])] for k in strikes]))
         creeping = np.flatnonzero(plan.walking) if mm.enabled else np.zeros(0, int)
         if creeping.size:
             for a in np.flatnonzero(mm.creep_velocity_mps):
-                self.contact[a].append(StancePieces(n + 1, creeping, [
+                self.contact[a].append(StancePieces(creeping, [
                     smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
                                                 mm.creep_velocity_mps[a]) for k in creeping]))
         self.rotation = self._build_stance_rotation()
@@ -329,7 +318,7 @@ class FootTrajectory:
         self._rotation_span = (np.array([min(p.t0 for axis in s for p in axis) for s in per_stance]),
                                np.array([max(p.t1 for axis in s for p in axis) for s in per_stance]))
         self._rotation_stances = walking
-        return tuple([StancePieces(plan.n_strides + 1, walking, [s[a][i] for s in per_stance])
+        return tuple([StancePieces(walking, [s[a][i] for s in per_stance])
                       for i in range(len(per_stance[0][a]))] for a in range(2))
 
     def _rotation_stack(self, t: np.ndarray, stance: np.ndarray) -> np.ndarray:

@@ -119,20 +119,38 @@ class PieceTable:
         self.after = np.array([f.after for f in functions])
 
     def stack(self, t: np.ndarray, function: np.ndarray) -> np.ndarray:
-        """(5, N) derivative stacks at times ``t`` (N,) s, sample i of function ``function[i]``: what that
-        function's :meth:`Piecewise.stack` gives there."""
+        """(5, N) derivative stacks at increasing times ``t`` (N,) s, sample i of function ``function[i]``
+        (non-decreasing): what that function's :meth:`Piecewise.stack` gives there."""
+        functions = np.arange(self.t0.size)
         out = np.zeros((NDER, t.size))
-        t0, t1 = self.t0[function], self.t1[function]
-        inside = (t >= t0) & (t <= t1)
-        if inside.any():
-            ti, fi = t[inside], function[inside]
+        self.add_to(out, t, np.searchsorted(function, functions, side="left"),
+                    np.searchsorted(function, functions, side="right"))
+        return out
+
+    def add_to(self, out: np.ndarray, t: np.ndarray, start: np.ndarray, stop: np.ndarray) -> None:
+        """``out`` (5, N) += the stack of function j on samples ``start[j]:stop[j]`` of the increasing times
+        ``t`` (N,) s, for every j (the runs disjoint and in order): inside a function's window its whole stack, outside its
+        held value in row 0; equal to adding its :meth:`Piecewise.stack` whenever ``out`` holds no -0.0."""
+        lo = np.clip(np.searchsorted(t, self.t0, side="left"), start, stop)  # first sample with t >= t0
+        hi = np.clip(np.searchsorted(t, self.t1, side="right"), lo, stop)  # first sample with t > t1
+        inside = _ranges(lo, hi)
+        if inside.size:
+            ti, fi = t[inside], np.repeat(np.arange(lo.size), hi - lo)
             # interior breakpoints <= t (Piecewise's searchsorted side="right"): the last piece includes its end
             piece = self._first[fi] + (ti[:, None] >= self._interior[fi]).sum(axis=1)
-            out[:, inside] = _horner(self._coef, piece, ti - self._left[piece])
-        before, after = t < t0, t > t1
-        out[0, before] = self.before[function[before]]
-        out[0, after] = self.after[function[after]]
-        return out
+            value = _horner(self._coef, piece, ti - self._left[piece])
+            if inside.size == out.shape[1]:  # every sample inside its function's window
+                out += value
+            else:
+                out[:, inside] += value
+        out[0, _ranges(start, lo)] += np.repeat(self.before, lo - start)
+        out[0, _ranges(hi, stop)] += np.repeat(self.after, stop - hi)
+
+
+def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """The indices start[j], ..., stop[j] - 1 of every j, concatenated."""
+    counts = stop - start
+    return np.arange(counts.sum()) + np.repeat(start - (np.cumsum(counts) - counts), counts)
 
 
 def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
@@ -150,8 +168,8 @@ def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
     out : (..., 5, N) derivative stacks, updated in place.
     t : (N,) s, increasing sample times.
     t0, t1 : (K,) or scalar, s: the windows outside which the functions are constant.
-    stack : callable mapping times (n,) s and the function of each (n,) int (0 to K-1) to (..., 5, n)
-        derivative stacks.
+    stack : callable mapping increasing times (n,) s and the function of each (n,) int, non-decreasing (0 to
+        K-1), to (..., 5, n) derivative stacks.
     """
     t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
     if np.any(t0[1:] <= t1[:-1]):
@@ -160,15 +178,15 @@ def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
     if k == 0:
         return
     lo, hi = np.searchsorted(t, t0, side="left"), np.searchsorted(t, t1, side="right")
-    inside = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi)])
+    inside = _ranges(lo, hi)
     functions = np.arange(k)
-    # each function once just before and once just after its window (its held values), then on its window
-    part = stack(np.concatenate([np.nextafter(t0, -np.inf), np.nextafter(t1, np.inf), t[inside]]),
-                 np.concatenate([functions, functions, np.repeat(functions, hi - lo)]))
-    before, after = part[..., 0, :k], part[..., 0, k:2 * k]
+    # each function just before and just after its window (its held values), then on its window
+    held = stack(np.stack([np.nextafter(t0, -np.inf), np.nextafter(t1, np.inf)], axis=1).ravel(),
+                 np.repeat(functions, 2))[..., 0, :]
+    before, after = held[..., 0::2], held[..., 1::2]
     for j in np.flatnonzero(hi < t.size):  # a sample adds the held values of the windows before it, in order
         out[..., 0, hi[j]:] += after[..., j:j + 1]
-    out[..., inside] += part[..., 2 * k:]
+    out[..., inside] += stack(t[inside], np.repeat(functions, hi - lo))
     held_before = (before != 0.0) | np.signbit(before)
     for j in np.flatnonzero(np.any(held_before.reshape(-1, k), axis=0) & (lo > 0)):  # then the later ones'
         out[..., 0, :lo[j]] += before[..., j:j + 1]
