@@ -8,6 +8,8 @@ A *derivative stack* is an array ``(5, N)``: row ``j`` holds the j-th time deriv
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.polynomial import polynomial as P
 
@@ -39,17 +41,22 @@ class Piecewise:
         self.breaks = np.asarray(breaks, float)
         self.t0 = float(self.breaks[0])
         self.t1 = float(self.breaks[-1])
-        self.before = power_sum(self.coef[:, 0], 0.0)
-        self.after = power_sum(self.coef[:, -1], self.t1 - float(self.breaks[-2]))
         self._left = self.breaks[:-1]  # left end of each piece (s)
         self._interior = self.breaks[1:-1]  # breakpoints between pieces (s)
-        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (k+1, 5, m)
-        order = self.coef.shape[0]
-        powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of coef
-        self._coef = np.zeros((order, NDER, self.coef.shape[1]))
-        self._coef[:, 0] = self.coef
-        for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
-            self._coef[1:, j] = (self._coef[:, j - 1] * powers)[:-1]
+
+    @functools.cached_property
+    def before(self) -> float:
+        """The value held before the breakpoint range."""
+        return float(power_sum(self.coef[:, 0], 0.0))
+
+    @functools.cached_property
+    def after(self) -> float:
+        """The value held after the breakpoint range."""
+        return float(power_sum(self.coef[:, -1], self.t1 - float(self.breaks[-2])))
+
+    @functools.cached_property
+    def _coef(self) -> np.ndarray:
+        return derivative_table(self.coef)
 
     @property
     def pp(self):
@@ -76,6 +83,18 @@ class Piecewise:
         out[0, t < self.t0] = self.before
         out[0, t > self.t1] = self.after
         return out
+
+
+def derivative_table(coef: np.ndarray) -> np.ndarray:
+    """(k+1, 5, m) coefficients, highest power first and zero-padded at the top, of the m pieces' polynomials
+    ``coef`` (k+1, m) and their derivatives 1..4."""
+    order = coef.shape[0]
+    powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of coef
+    table = np.zeros((order, NDER, coef.shape[1]))
+    table[:, 0] = coef
+    for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
+        table[1:, j] = (table[:, j - 1] * powers)[:-1]
+    return table
 
 
 def _horner(coef: np.ndarray, piece: np.ndarray | None, local: np.ndarray) -> np.ndarray:
@@ -105,7 +124,7 @@ class PieceTable:
         orders = {f.coef.shape[0] for f in functions}
         if len(orders) != 1:
             raise ValueError(f"a PieceTable packs functions of one degree; got {len(orders)} ({sorted(orders)})")
-        self._coef = np.concatenate([f._coef for f in functions], axis=2)  # (k+1, 5, pieces of all)
+        self._coef = derivative_table(np.concatenate([f.coef for f in functions], axis=1))  # (k+1, 5, pieces)
         self._left = np.concatenate([f._left for f in functions])
         counts = np.array([f.coef.shape[1] for f in functions])
         self._first = np.concatenate([[0], np.cumsum(counts)[:-1]])  # each function's first piece
@@ -115,8 +134,9 @@ class PieceTable:
             self._interior[i, :f._interior.size] = f._interior
         self.t0 = np.array([f.t0 for f in functions])
         self.t1 = np.array([f.t1 for f in functions])
-        self.before = np.array([f.before for f in functions])
-        self.after = np.array([f.after for f in functions])
+        self.before = power_sum(np.stack([f.coef[:, 0] for f in functions], axis=1), 0.0)  # held values
+        self.after = power_sum(np.stack([f.coef[:, -1] for f in functions], axis=1),
+                               self.t1 - np.array([f.breaks[-2] for f in functions]))
 
     def stack(self, t: np.ndarray, function: np.ndarray) -> np.ndarray:
         """(5, N) derivative stacks at increasing times ``t`` (N,) s, sample i of function ``function[i]``
@@ -228,13 +248,14 @@ def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
     return Piecewise(coef[:, ::-1].T.copy(), knots)
 
 
-def power_sum(column: np.ndarray, local: float) -> float:
-    """Value at ``local`` (s from the piece's left end) of one piece's polynomial (``column``: coefficients,
-    highest power first), summed from the lowest power up as :class:`scipy.interpolate.PPoly` evaluates it."""
+def power_sum(columns: np.ndarray, local) -> np.ndarray:
+    """Values at ``local`` (s from the pieces' left ends; scalar or one per column) of pieces' polynomials
+    (``columns`` (k+1,) or (k+1, F): coefficients, highest power first), summed from the lowest power up as
+    :class:`scipy.interpolate.PPoly` evaluates it."""
     value, power = 0.0, 1.0
-    for c in column[::-1].tolist():
-        value += c * power
-        power *= local
+    for c in np.asarray(columns, float)[::-1]:
+        value = value + c * power
+        power = power * local
     return value
 
 
@@ -244,7 +265,7 @@ def antiderivative(coef: np.ndarray, breaks: np.ndarray) -> np.ndarray:
     out = np.zeros((coef.shape[0] + 1, coef.shape[1]))
     out[:-1] = coef / np.arange(coef.shape[0], 0, -1, dtype=float)[:, None]
     for i in range(1, coef.shape[1]):
-        out[-1, i] = power_sum(out[:, i - 1], float(breaks[i] - breaks[i - 1]))
+        out[-1, i] = power_sum(out[:, i - 1], breaks[i] - breaks[i - 1])
     return out
 
 
