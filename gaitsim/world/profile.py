@@ -226,7 +226,7 @@ class FootTrajectory:
         n = plan.n_strides
         self.walk_yaw = np.unwrap(plan.yaw)
         self.foot_yaw = self.walk_yaw + g.toe_out
-        self.frames = [_rot_z(y) for y in self.walk_yaw]
+        self.frames = np.array([_rot_z(y) for y in self.walk_yaw])  # (n+1, 3, 3) walking frame -> world
         self.heading = np.array([[np.cos(y), np.sin(y)] for y in self.foot_yaw])  # (n+1, 2) foot's heading
 
         self.pitch = pitch_profile(plan, g, imp, mm)
@@ -343,11 +343,9 @@ class FootTrajectory:
         for a in range(3):
             for pieces in self.contact[a]:
                 pieces.add_to(local[a], t, stance)
-        out = np.empty_like(local)
-        bounds = np.flatnonzero(np.diff(stance)) + 1
-        for k, start, stop in zip(stance[np.concatenate([[0], bounds])] if t.size else (),
-                                  np.concatenate([[0], bounds]), np.concatenate([bounds, [t.size]])):
-            out[:, :, start:stop] = np.einsum("ij,jdn->idn", self.frames[k], local[:, :, start:stop])
+        frame = self.frames[stance]  # (N, 3, 3) walking frame -> world
+        out = np.stack([frame[:, i, 0] * local[0] + frame[:, i, 1] * local[1] + frame[:, i, 2] * local[2]
+                        for i in range(3)])
         out[:, 0] += self.heel_base[stance].T
         travel, height = self.sole.heel(pitch)
         heading = self.heading[stance].T  # (2, N)

@@ -101,7 +101,13 @@ def _horner(coef: np.ndarray, piece: np.ndarray | None, local: np.ndarray) -> np
     """(5, n) derivative stacks from the derivative coefficient table ``coef`` (k+1, 5, m) (highest power
     first) of piece ``piece[i]`` (None: the only piece) at ``local[i]`` s from its left end: one Horner pass,
     each row of coefficients gathered for the samples as it is needed."""
-    rows = iter(coef) if piece is None else (np.take(row, piece, axis=1) for row in coef)
+    if piece is None:
+        rows = iter(coef)
+    elif np.all(piece[1:] >= piece[:-1]):  # samples in the order of the pieces: each row's columns repeated
+        counts = np.bincount(piece, minlength=coef.shape[2])
+        rows = (np.repeat(row, counts, axis=1) for row in coef)
+    else:
+        rows = (np.take(row, piece, axis=1) for row in coef)
     value = np.empty((NDER, local.size))
     value[:] = next(rows)
     for c in rows:
