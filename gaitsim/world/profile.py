@@ -261,10 +261,8 @@ class FootTrajectory:
         # heel stacks at each stance's initial contact and toe off: (3, 5, 2 (n+1)), ic and to of each in turn
         t_ends = np.stack([plan.t_ic, plan.t_to], axis=1).ravel()
         ends = self._stance_heel(t_ends, self.pitch.stack(t_ends), np.repeat(np.arange(n + 1), 2))
-        swings = [self._build_swing(k, ends[:, :, 2 * k + 1], ends[:, :, 2 * k + 2]) for k in range(n)]
-        self._swing_path = [smooth.PieceTable([s[0][a] for s in swings]) for a in range(3)] if n else []
-        self._swing_lift = smooth.PieceTable([s[1] for s in swings]) if n else None
-        self._swing_side = smooth.PieceTable([s[2] for s in swings]) if n else None
+        if n:
+            self._build_swings(ends)
         mid_yaw = [0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1]) for k in range(n)]
         self._swing_sin = np.array([np.sin(y) for y in mid_yaw])  # sideways direction of each swing
         self._swing_cos = np.array([np.cos(y) for y in mid_yaw])
@@ -364,16 +362,19 @@ class FootTrajectory:
         out[:2] += rolled
         return out
 
-    def _build_swing(self, k: int, start: np.ndarray,
-                     end: np.ndarray) -> tuple[list[smooth.Piecewise], smooth.Piecewise, smooth.Piecewise]:
-        """Swing k's heel-point Hermites (x, y, z) from ``start`` (3, 5), the heel's derivative stacks at toe
-        off, to ``end`` (3, 5) at the next initial contact; its lift (raising the mid-swing heel to
-        ``swing_height_m``) and its sideways excursion."""
-        g = self.walk.gait
-        t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
-        pieces = [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
-        z_mid = pieces[2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
-        return pieces, smooth.lift(t0, t1 - t0, g.swing_height_m - z_mid), smooth.lift(t0, t1 - t0, g.swing_lateral_m)
+    def _build_swings(self, ends: np.ndarray) -> None:
+        """The swings' heel-point Hermites (x, y, z), each from the heel's derivative stacks at toe off to those
+        at the next initial contact (``ends`` (3, 5, 2 (n+1)): each stance's at initial contact and at toe off
+        in turn), their lifts (raising the mid-swing heel to ``swing_height_m``) and their sideways excursions,
+        each kind packed in a :class:`smooth.PieceTable`."""
+        g, n = self.walk.gait, self.plan.n_strides
+        t0, t1 = self.plan.t_to[:-1], self.plan.t_ic[1:]
+        self._swing_path = [smooth.PieceTable([smooth.hermite([t0[k], t1[k]], [ends[a, :, 2 * k + 1], ends[a, :, 2 * k + 2]])
+                                               for k in range(n)]) for a in range(3)]
+        z_mid = self._swing_path[2].stack(0.5 * (t0 + t1), np.arange(n))[0]
+        self._swing_lift = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_height_m - z_mid[k])
+                                              for k in range(n)])
+        self._swing_side = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_lateral_m) for k in range(n)])
 
     def _swing_heel(self, t: np.ndarray, swing: np.ndarray) -> np.ndarray:
         """(3, 5, N) heel point at times ``t`` (N,) s within the swings ``swing`` (N,) int."""
