@@ -104,10 +104,10 @@ class FootModel:
         vel, ang_rate = np.asarray(qvel, float)[:, :3], np.asarray(qvel, float)[:, 3:]
         acc, ang_acc = np.asarray(qacc, float)[:, :3], np.asarray(qacc, float)[:, 3:]
         cz, sz, cy, sy = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-        zero = np.zeros_like(yaw)
-        axes = np.stack([np.stack([zero, zero, zero + 1.0], -1),  # yaw axis e_z
-                         np.stack([-sz, cz, zero], -1),  # pitch axis e_y' = Rz e_y
-                         np.stack([cz * cy, sz * cy, -sy], -1)])  # roll axis e_x'' = Rz Ry e_x
+        axes = np.zeros((3, yaw.size, 3))
+        axes[0, :, 2] = 1.0  # yaw axis e_z
+        axes[1, :, 0], axes[1, :, 1] = -sz, cz  # pitch axis e_y' = Rz e_y
+        axes[2, :, 0], axes[2, :, 1], axes[2, :, 2] = cz * cy, sz * cy, -sy  # roll axis e_x'' = Rz Ry e_x
         w_yaw_pitch = ang_rate[:, :1] * axes[0] + ang_rate[:, 1:2] * axes[1]
         w = w_yaw_pitch + ang_rate[:, 2:] * axes[2]
         axes_rate = np.stack([cross(ang_rate[:, :1] * axes[0], axes[1]), cross(w_yaw_pitch, axes[2])])

@@ -149,8 +149,9 @@ class RollingSole:
         if mid.any():
             u = (theta[mid] + b) / (2 * b)
             value = self._rows[:, -1:] + u * 0  # numpy.polynomial.polynomial.polyval on every row
-            for column in self._rows[:, -2::-1].T:
-                value = column[:, None] + value * u
+            for column in self._rows[:, -2::-1].T:  # value = column + value u, in place
+                value *= u
+                value += column[:, None]
             height[:, mid] = value[:-1]
             travel[0, mid] = value[-1]
         toe = theta >= b
