@@ -268,9 +268,12 @@ class FootTrajectory:
         self._swing_sin = np.array([np.sin(y) for y in mid_yaw])  # sideways direction of each swing
         self._swing_cos = np.array([np.cos(y) for y in mid_yaw])
         # swing turns of the foot: yaw to the next stance, roll bump
-        self._swing_yaw = [smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
-                                             self.foot_yaw[k + 1] - self.foot_yaw[k]) for k in range(n)]
-        self._swing_roll = [smooth.lift(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], g.swing_roll) for k in range(n)]
+        if n:
+            self._swing_yaw = smooth.PieceTable([smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
+                                                                   self.foot_yaw[k + 1] - self.foot_yaw[k])
+                                                 for k in range(n)])
+            self._swing_roll = smooth.PieceTable([smooth.lift(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], g.swing_roll)
+                                                  for k in range(n)])
         self.stance_roll = self._build_stance_roll()
 
     def _build_stance_roll(self) -> smooth.Piecewise | None:
@@ -388,9 +391,9 @@ class FootTrajectory:
 
     # -- public ---------------------------------------------------------------------------------------------
 
-    def _heel(self, ts: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-        """(3, 5, N) derivative stacks of the heel contact point (m, world) at increasing times ``ts`` (s), given
-        the pitch stack (5, N) there."""
+    def _heel(self, ts: np.ndarray, pitch: np.ndarray, out: np.ndarray) -> None:
+        """Write into ``out`` (3, 5, N), zero on entry, the derivative stacks of the heel contact point (m, world)
+        at increasing times ``ts`` (s), given the pitch stack (5, N) there."""
         plan = self.plan
         # stance k: [t_ic[k], t_to[k]) (the last to the end); swing k: [t_to[k], t_ic[k + 1])
         ic, to = np.searchsorted(ts, plan.t_ic), np.searchsorted(ts, plan.t_to)
@@ -399,42 +402,43 @@ class FootTrajectory:
         k = np.searchsorted(ic, rows, side="right") - 1  # the last stance begun by each sample
         stance = (k >= 0) & ((k == n) | (rows < to[np.minimum(k, n)]))
         swing = (k >= 0) & (k < n) & ~stance
-        out = np.zeros((3, smooth.NDER, ts.size))
         out[:, :, stance] = self._stance_heel(ts[stance], pitch[:, stance], k[stance])
         if swing.any():
             out[:, :, swing] = self._swing_heel(ts[swing], k[swing])
-        return out
 
-    def _angles(self, ts: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-        """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at increasing times ``ts`` (s), given the
-        pitch stack (5, N) there; each piece is evaluated on its own window only."""
+    def _angles(self, ts: np.ndarray, pitch: np.ndarray, out: np.ndarray) -> None:
+        """Write into ``out`` (3, 5, N), zero on entry, the derivative stacks of (yaw, pitch, roll) in rad at
+        increasing times ``ts`` (s), given the pitch stack (5, N) there; each piece is evaluated on its own
+        window only."""
         plan = self.plan
-        roll_yaw = np.zeros((2, smooth.NDER, ts.size))
-        roll, yaw = roll_yaw
+        yaw, roll = out[0], out[2]
+        roll_yaw = out[2::-2]  # a view of (roll, yaw)
         yaw[0] = self.foot_yaw[0]
+        out[1] = pitch
         if plan.n_strides:
-            turns, bumps = smooth.PieceTable(self._swing_yaw), smooth.PieceTable(self._swing_roll)
-            smooth.accumulate(yaw, ts, plan.t_to[:-1], plan.t_ic[1:], turns.stack)
-            smooth.accumulate(roll, ts, plan.t_to[:-1], plan.t_ic[1:], bumps.stack)
+            smooth.accumulate(yaw, ts, plan.t_to[:-1], plan.t_ic[1:], self._swing_yaw.stack)
+            smooth.accumulate(roll, ts, plan.t_to[:-1], plan.t_ic[1:], self._swing_roll.stack)
         if self.stance_roll is not None:
             smooth.accumulate(roll, ts, self.stance_roll.t0, self.stance_roll.t1,
                               lambda times, _: self.stance_roll.stack(times))
         if self.rotation is not None:
             smooth.accumulate(roll_yaw, ts, *self._rotation_span,
                               lambda times, i: self._rotation_stack(times, self._rotation_stances[i]))
-        return np.stack([yaw, pitch, roll])
 
     def _sorted(self, t: np.ndarray, *parts) -> np.ndarray:
-        """The stacks ``parts`` (methods of (ts, pitch)) at times ``t`` (s) in any order, stacked: evaluated on
-        the sorted times with one evaluation of the pitch, returned in the order of ``t``."""
+        """The stacks ``parts`` (methods of (ts, pitch, out) writing three joints' stacks) at times ``t`` (s) in
+        any order, stacked: evaluated on the sorted times with one evaluation of the pitch, returned in the order
+        of ``t``."""
         t = np.asarray(t, float).ravel()
-        if np.all(t[1:] >= t[:-1]):  # already in order (a sampled record): no permutation
-            pitch = self.pitch.stack(t)
-            return np.concatenate([part(t, pitch) for part in parts])
-        order = np.argsort(t, kind="stable")
-        ts = t[order]
+        in_order = bool(np.all(t[1:] >= t[:-1]))  # a sampled record: no permutation
+        order = None if in_order else np.argsort(t, kind="stable")
+        ts = t if in_order else t[order]
         pitch = self.pitch.stack(ts)
-        stacks = np.concatenate([part(ts, pitch) for part in parts])
+        stacks = np.zeros((3 * len(parts), smooth.NDER, t.size))
+        for i, part in enumerate(parts):
+            part(ts, pitch, stacks[3 * i:3 * i + 3])
+        if in_order:
+            return stacks
         out = np.empty_like(stacks)
         out[:, :, order] = stacks
         return out
