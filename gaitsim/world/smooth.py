@@ -143,6 +143,7 @@ class PieceTable:
         self.before = power_sum(np.stack([f.coef[:, 0] for f in functions], axis=1), 0.0)  # held values
         self.after = power_sum(np.stack([f.coef[:, -1] for f in functions], axis=1),
                                self.t1 - np.array([f.breaks[-2] for f in functions]))
+        self._live = np.flatnonzero([np.any(f.coef) for f in functions])  # the functions not identically zero
 
     def stack(self, t: np.ndarray, function: np.ndarray) -> np.ndarray:
         """(5, N) derivative stacks at increasing times ``t`` (N,) s, sample i of function ``function[i]``
@@ -155,13 +156,16 @@ class PieceTable:
 
     def add_to(self, out: np.ndarray, t: np.ndarray, start: np.ndarray, stop: np.ndarray) -> None:
         """``out`` (5, N) += the stack of function j on samples ``start[j]:stop[j]`` of the increasing times
-        ``t`` (N,) s, for every j (the runs disjoint and in order): inside a function's window its whole stack, outside its
-        held value in row 0; equal to adding its :meth:`Piecewise.stack` whenever ``out`` holds no -0.0."""
-        lo = np.clip(np.searchsorted(t, self.t0, side="left"), start, stop)  # first sample with t >= t0
-        hi = np.clip(np.searchsorted(t, self.t1, side="right"), lo, stop)  # first sample with t > t1
+        ``t`` (N,) s, for every j (the runs disjoint and in order): inside a function's window its whole
+        stack, outside its held value in row 0; equal to adding its :meth:`Piecewise.stack` whenever ``out``
+        holds no -0.0 (so a function that is identically zero, whose stack is +-0, is skipped)."""
+        live = self._live
+        start, stop = start[live], stop[live]
+        lo = np.clip(np.searchsorted(t, self.t0[live], side="left"), start, stop)  # first sample with t >= t0
+        hi = np.clip(np.searchsorted(t, self.t1[live], side="right"), lo, stop)  # first sample with t > t1
         inside = _ranges(lo, hi)
         if inside.size:
-            ti, fi = t[inside], np.repeat(np.arange(lo.size), hi - lo)
+            ti, fi = t[inside], np.repeat(live, hi - lo)
             # interior breakpoints <= t (Piecewise's searchsorted side="right"): the last piece includes its end
             piece = self._first[fi] + (ti[:, None] >= self._interior[fi]).sum(axis=1)
             value = _horner(self._coef, piece, ti - self._left[piece])
@@ -169,8 +173,8 @@ class PieceTable:
                 out += value
             else:
                 out[:, inside] += value
-        out[0, _ranges(start, lo)] += np.repeat(self.before, lo - start)
-        out[0, _ranges(hi, stop)] += np.repeat(self.after, stop - hi)
+        out[0, _ranges(start, lo)] += np.repeat(self.before[live], lo - start)
+        out[0, _ranges(hi, stop)] += np.repeat(self.after[live], stop - hi)
 
 
 def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
