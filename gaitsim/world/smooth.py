@@ -56,6 +56,7 @@ class Piecewise:
 
     @functools.cached_property
     def _coef(self) -> np.ndarray:
+        """(k+1, 5, m) coefficients of the function and its derivatives 1..4 (:func:`derivative_table`)."""
         return derivative_table(self.coef)
 
     @property
@@ -188,10 +189,10 @@ def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
     ``out`` in turn, evaluating each only on the samples in its window.
 
     The windows are disjoint and in increasing order. Inside its window a function's stack is added; outside,
-    row 0 gets its held value: after the window always, before it unless that value is +0.0 (adding +0.0 to a
-    number that is not -0.0 changes nothing). Each sample gets the held values and the stacks in the order of
-    the functions, so the result equals ``for j: out += stack_j(t)`` bit for bit whenever ``out`` holds no
-    -0.0, as in any sum started from ``np.zeros``.
+    row 0 gets its held value there unless that value is +0.0 (adding +0.0 to a number that is not -0.0 changes
+    nothing). Each sample gets the held values and the stacks in the order of the functions, so the result
+    equals ``for j: out += stack_j(t)`` bit for bit whenever ``out`` holds no -0.0, as in any sum started from
+    ``np.zeros``.
 
     Parameters
     ----------
@@ -213,13 +214,13 @@ def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
     # each function just before and just after its window (its held values), then on its window
     held = stack(np.stack([np.nextafter(t0, -np.inf), np.nextafter(t1, np.inf)], axis=1).ravel(),
                  np.repeat(functions, 2))[..., 0, :]
-    before, after = held[..., 0::2], held[..., 1::2]
-    for j in np.flatnonzero(hi < t.size):  # a sample adds the held values of the windows before it, in order
-        out[..., 0, hi[j]:] += after[..., j:j + 1]
-    out[..., inside] += stack(t[inside], np.repeat(functions, hi - lo))
-    held_before = (before != 0.0) | np.signbit(before)
-    for j in np.flatnonzero(np.any(held_before.reshape(-1, k), axis=0) & (lo > 0)):  # then the later ones'
-        out[..., 0, :lo[j]] += before[..., j:j + 1]
+    held = held.reshape(-1, k, 2)
+    adds = np.any((held != 0.0) | np.signbit(held), axis=0)  # (K, 2): a held value other than +0.0
+    for j in np.flatnonzero(adds[:, 1] & (hi < t.size)):  # a sample adds the held values of the windows before
+        out[..., 0, hi[j]:] += held[:, j, 1].reshape(out.shape[:-2] + (1,))  # it in order,
+    out[..., inside] += stack(t[inside], np.repeat(functions, hi - lo))  # its own window's stack,
+    for j in np.flatnonzero(adds[:, 0] & (lo > 0)):  # then the later ones' values before them
+        out[..., 0, :lo[j]] += held[:, j, 0].reshape(out.shape[:-2] + (1,))
 
 
 def _hermite_tail() -> np.ndarray:
