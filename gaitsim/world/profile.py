@@ -20,6 +20,7 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -208,6 +209,24 @@ class StancePieces:
                 out[:, a:b] += piece.stack(t[a:b])
 
 
+@dataclass
+class StanceRotation:
+    """Foot-flat roll and yaw of the walking stances: per axis, the kinds of pieces in the order added.
+
+    Attributes
+    ----------
+    stances : (M,) int, the walking stances.
+    t0, t1 : (M,) s, each stance's span, from its first piece's start to its last piece's end (disjoint).
+    roll, yaw : lists of StancePieces (rad).
+    """
+
+    stances: np.ndarray
+    t0: np.ndarray
+    t1: np.ndarray
+    roll: list[StancePieces]
+    yaw: list[StancePieces]
+
+
 class FootTrajectory:
     """Joint trajectories of one walk.
 
@@ -264,16 +283,6 @@ class FootTrajectory:
         ends = self._stance_heel(t_ends, self.pitch.stack(t_ends), np.repeat(np.arange(n + 1), 2))
         if n:
             self._build_swings(ends)
-        mid_yaw = [0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1]) for k in range(n)]
-        self._swing_sin = np.array([np.sin(y) for y in mid_yaw])  # sideways direction of each swing
-        self._swing_cos = np.array([np.cos(y) for y in mid_yaw])
-        # swing turns of the foot: yaw to the next stance, roll bump
-        if n:
-            self._swing_yaw = smooth.PieceTable([smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
-                                                                   self.foot_yaw[k + 1] - self.foot_yaw[k])
-                                                 for k in range(n)])
-            self._swing_roll = smooth.PieceTable([smooth.lift(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], g.swing_roll)
-                                                  for k in range(n)])
         self.stance_roll = self._build_stance_roll()
 
     def _build_stance_roll(self) -> smooth.Piecewise | None:
@@ -292,7 +301,7 @@ class FootTrajectory:
                        [edge, -rate, -2 * rate / flat, 0, 0], [0, 0, 0, 0, 0]]
         return smooth.hermite(np.array(knots), np.array(stacks, float))
 
-    def _build_stance_rotation(self) -> tuple[list[StancePieces], list[StancePieces]] | None:
+    def _build_stance_rotation(self) -> StanceRotation | None:
         """Roll and yaw of the foot flat of the walking stances: the pieces (rad) of roll (the pronation held
         through foot flat and the loading pulse, a left foot's mirrored for a right one, plus the sustained
         rotation's roll) and of yaw (the sustained rotation's), each ending with the return of the angle reached
@@ -317,18 +326,18 @@ class FootTrajectory:
             for axis in pieces:
                 axis.append(smooth.smoothstep(plan.t_to[k], swing, 0.0, -sum(p.after for p in axis)))
             per_stance.append(pieces)
-        self._rotation_span = (np.array([min(p.t0 for axis in s for p in axis) for s in per_stance]),
-                               np.array([max(p.t1 for axis in s for p in axis) for s in per_stance]))
-        self._rotation_stances = walking
-        return tuple([StancePieces(walking, [s[a][i] for s in per_stance])
-                      for i in range(len(per_stance[0][a]))] for a in range(2))
+        roll_pieces, yaw_pieces = ([StancePieces(walking, [s[a][i] for s in per_stance])
+                                    for i in range(len(per_stance[0][a]))] for a in range(2))
+        return StanceRotation(walking, np.array([min(p.t0 for axis in s for p in axis) for s in per_stance]),
+                              np.array([max(p.t1 for axis in s for p in axis) for s in per_stance]),
+                              roll_pieces, yaw_pieces)
 
     def _rotation_stack(self, t: np.ndarray, stance: np.ndarray) -> np.ndarray:
         """(2, 5, N) stacks at times ``t`` (N,) s of the foot-flat (roll, yaw) angles (rad) of the stances
         ``stance`` (N,) int: zero before the stance's foot flat, rising through it, held through the push-off,
         returned to zero over the following swing; zero for a stance without them."""
         out = np.zeros((2, smooth.NDER, t.size))
-        for a, pieces in enumerate(self.rotation or ()):
+        for a, pieces in enumerate((self.rotation.roll, self.rotation.yaw) if self.rotation else ()):
             for piece in pieces:
                 piece.add_to(out[a], t, stance)
         return out
@@ -354,7 +363,7 @@ class FootTrajectory:
         rolled = heading[:, None, :] * travel
         out[2] += height
         if self.rotation is not None and self.walk.micro.stance_rotation_rate[2]:  # a yaw in the walking stances
-            turned = np.isin(stance, self._rotation_stances)
+            turned = np.isin(stance, self.rotation.stances)
             arm = self.walk.micro.stance_yaw_pivot_frac * self.toe_length * heading[:, turned]
             offset = rolled[:, :, turned]
             offset[:, 0] -= arm
@@ -367,18 +376,26 @@ class FootTrajectory:
         return out
 
     def _build_swings(self, ends: np.ndarray) -> None:
-        """The swings' heel-point Hermites (x, y, z), each from the heel's derivative stacks at toe off to those
-        at the next initial contact (``ends`` (3, 5, 2 (n+1)): each stance's at initial contact and at toe off
-        in turn), their lifts (raising the mid-swing heel to ``swing_height_m``) and their sideways excursions,
-        each kind packed in a :class:`smooth.PieceTable`."""
-        g, n = self.walk.gait, self.plan.n_strides
+        """The swings' pieces, each kind packed in a :class:`smooth.PieceTable`: the heel point's Hermites
+        (x, y, z), each from the heel's derivative stacks at toe off to those at the next initial contact
+        (``ends`` (3, 5, 2 (n+1)): each stance's at initial contact and at toe off in turn), the lifts (raising
+        the mid-swing heel to ``swing_height_m``) and sideways excursions (along each swing's mean walking
+        direction turned left), and the foot's turns: yaw to the next stance, roll bump."""
+        g, n, yaw = self.walk.gait, self.plan.n_strides, self.foot_yaw
         t0, t1 = self.plan.t_to[:-1], self.plan.t_ic[1:]
-        self._swing_path = [smooth.PieceTable([smooth.hermite([t0[k], t1[k]], [ends[a, :, 2 * k + 1], ends[a, :, 2 * k + 2]])
+        self._swing_path = [smooth.PieceTable([smooth.hermite([t0[k], t1[k]], [ends[a, :, 2 * k + 1],
+                                                                               ends[a, :, 2 * k + 2]])
                                                for k in range(n)]) for a in range(3)]
         z_mid = self._swing_path[2].stack(0.5 * (t0 + t1), np.arange(n))[0]
         self._swing_lift = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_height_m - z_mid[k])
                                               for k in range(n)])
         self._swing_side = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_lateral_m) for k in range(n)])
+        mid_yaw = [0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1]) for k in range(n)]
+        self._swing_sin = np.array([np.sin(y) for y in mid_yaw])
+        self._swing_cos = np.array([np.cos(y) for y in mid_yaw])
+        self._swing_yaw = smooth.PieceTable([smooth.smoothstep(t0[k], t1[k] - t0[k], 0.0, yaw[k + 1] - yaw[k])
+                                             for k in range(n)])
+        self._swing_roll = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_roll) for k in range(n)])
 
     def _swing_heel(self, t: np.ndarray, swing: np.ndarray) -> np.ndarray:
         """(3, 5, N) heel point at times ``t`` (N,) s within the swings ``swing`` (N,) int."""
@@ -422,8 +439,8 @@ class FootTrajectory:
             smooth.accumulate(roll, ts, self.stance_roll.t0, self.stance_roll.t1,
                               lambda times, _: self.stance_roll.stack(times))
         if self.rotation is not None:
-            smooth.accumulate(roll_yaw, ts, *self._rotation_span,
-                              lambda times, i: self._rotation_stack(times, self._rotation_stances[i]))
+            smooth.accumulate(roll_yaw, ts, self.rotation.t0, self.rotation.t1,
+                              lambda times, i: self._rotation_stack(times, self.rotation.stances[i]))
 
     def _sorted(self, t: np.ndarray, *parts) -> np.ndarray:
         """The stacks ``parts`` (methods of (ts, pitch, out) writing three joints' stacks) at times ``t`` (s) in
