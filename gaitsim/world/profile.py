@@ -354,9 +354,8 @@ class FootTrajectory:
         for a in range(3):
             for pieces in self.contact[a]:
                 pieces.add_to(local[a], t, stance)
-        frame = self.frames[stance]  # (N, 3, 3) walking frame -> world
-        out = np.stack([frame[:, i, 0] * local[0] + frame[:, i, 1] * local[1] + frame[:, i, 2] * local[2]
-                        for i in range(3)])
+        frame = np.ascontiguousarray(self.frames[stance].transpose(1, 2, 0))  # (3, 3, N) walking frame -> world
+        out = np.stack([frame[i, 0] * local[0] + frame[i, 1] * local[1] + frame[i, 2] * local[2] for i in range(3)])
         out[:, 0] += self.heel_base[stance].T
         travel, height = self.sole.heel(pitch)
         heading = self.heading[stance].T  # (2, N)
