@@ -144,7 +144,8 @@ class PieceTable:
         self.before = power_sum(np.stack([f.coef[:, 0] for f in functions], axis=1), 0.0)  # held values
         self.after = power_sum(np.stack([f.coef[:, -1] for f in functions], axis=1),
                                self.t1 - np.array([f.breaks[-2] for f in functions]))
-        self._live = np.flatnonzero([np.any(f.coef) for f in functions])  # the functions not identically zero
+        nonzero = np.logical_or.reduceat(np.any(self._coef[:, 0] != 0.0, axis=0), self._first)
+        self._live = np.flatnonzero(nonzero)  # the functions not identically zero
 
     def stack(self, t: np.ndarray, function: np.ndarray) -> np.ndarray:
         """(5, N) derivative stacks at increasing times ``t`` (N,) s, sample i of function ``function[i]``
@@ -234,6 +235,7 @@ def _hermite_tail() -> np.ndarray:
 
 _TAIL_INVERSE, _HEAD = _hermite_tail()
 _FACTORIALS = np.array([1.0, 1.0, 2.0, 6.0, 24.0])
+_POWERS = np.arange(2 * NDER)  # powers of u in the degree-9 Hermite
 
 
 def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
@@ -250,12 +252,12 @@ def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
     """
     knots = np.asarray(knots, float)
     stacks = np.asarray(stacks, float)
-    h = np.diff(knots)[:, None]
-    powers = h ** np.arange(NDER)
+    h = (knots[1:] - knots[:-1])[:, None]
+    powers = h ** _POWERS[:NDER]
     head = stacks[:-1] * powers / _FACTORIALS
     tail = (stacks[1:] * powers - head @ _HEAD.T) @ _TAIL_INVERSE.T
     a = np.concatenate([head, tail], axis=1)  # (K-1, 10) in u
-    coef = a / h ** np.arange(2 * NDER)  # in t - t_i
+    coef = a / h ** _POWERS  # in t - t_i
     return Piecewise(coef[:, ::-1].T.copy(), knots)
 
 
