@@ -1,7 +1,9 @@
 """Experiment runner: identical results across backends, resume, recomputation of changed tasks, failures."""
 
 import json
+import platform
 import re
+import subprocess
 import sys
 import time
 import uuid
@@ -272,3 +274,32 @@ def test_a_runs_numbers_do_not_depend_on_the_blas_thread_count():
     for a, b in zip(one[:4], two[:4]):
         np.testing.assert_array_equal(a, b)
     assert one[4] == two[4]
+
+
+FREED_KEPT = """
+import ctypes, sys
+import numpy as np
+class MallInfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in
+                ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")]
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = MallInfo2
+if sys.argv[1] == "keep":
+    from gaitsim.experiments.runner import keep_freed_memory
+    keep_freed_memory()
+block = np.ones(2_000_000)  # 16 MB
+del block
+print(libc.mallinfo2().fordblks)
+"""
+
+
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="keep_freed_memory sets glibc's malloc")
+def test_workers_keep_a_walks_freed_arrays_for_reuse():
+    # a fresh process frees a 16 MB array back to the kernel (mapped on its own); a worker keeps it in its heap
+    def free_bytes_kept(mode):
+        run = subprocess.run([sys.executable, "-c", FREED_KEPT, mode], capture_output=True, text=True, check=True,
+                             cwd=Path(__file__).resolve().parents[1])
+        return int(run.stdout)
+
+    assert free_bytes_kept("plain") < 2**20
+    assert free_bytes_kept("keep") >= 16_000_000

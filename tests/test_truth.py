@@ -441,5 +441,47 @@ def test_accumulate_on_the_window_equals_adding_the_whole_stack_bit_for_bit():
         start = np.zeros((smooth.NDER, times.size))
         start[0] = rng.normal(size=times.size)
         expected = start + piece.stack(times)
-        smooth.accumulate(start, times, piece.t0, piece.t1, piece.stack)
+        smooth.accumulate(start, times, piece.t0, piece.t1, lambda times, _: piece.stack(times))
         assert np.array_equal(start, expected)
+
+
+def _pieces(rng, count):
+    """``count`` Piecewise on disjoint increasing windows: of 1 and 3 pieces, zero or not before them."""
+    out = []
+    for j in range(count):
+        knots = 2.0 * j + np.cumsum(rng.uniform(0.05, 0.4, 2 + 2 * (j % 2)))
+        stacks = rng.normal(size=(knots.size, 5)) * [1.0, 10.0, 1e2, 1e3, 1e4]
+        if j % 3:
+            stacks[0] = 0.0  # zero before its window
+        if j == 4:
+            stacks[:] = 0.0  # identically zero (skipped by PieceTable.add_to)
+        out.append(smooth.hermite(knots, stacks))
+    return out
+
+
+def test_piece_table_gives_each_function_its_own_stack_bit_for_bit():
+    rng = np.random.default_rng(4)
+    pieces = _pieces(rng, 5)
+    t = np.sort(rng.uniform(-0.5, 10.5, 2000))
+    function = np.minimum((t // 2.0).astype(int), 4).clip(0)  # each function on a run of samples in order
+    table = smooth.PieceTable(pieces)
+    expected = np.concatenate([pieces[j].stack(t[function == j]) for j in range(5)], axis=1)
+    assert np.array_equal(table.stack(t, function), expected)
+    with pytest.raises(ValueError, match="one degree"):
+        smooth.PieceTable([pieces[0], smooth.lift(0.0, 1.0, 1.0)])
+
+
+def test_accumulate_of_several_windows_equals_adding_every_stack_in_turn_bit_for_bit():
+    rng = np.random.default_rng(5)
+    pieces = _pieces(rng, 6)
+    table = smooth.PieceTable(pieces)
+    t = np.sort(rng.uniform(-0.5, 12.5, 3000))
+    out = np.zeros((2, smooth.NDER, t.size))
+    out[:, 0] = rng.normal(size=(2, t.size))
+    expected = out.copy()
+    for piece in pieces:
+        expected += piece.stack(t)
+    smooth.accumulate(out, t, table.t0, table.t1, lambda times, f: np.stack([table.stack(times, f)] * 2))
+    assert np.array_equal(out, expected)
+    with pytest.raises(ValueError, match="disjoint"):
+        smooth.accumulate(out, t, [0.0, 1.0], [1.5, 2.0], table.stack)

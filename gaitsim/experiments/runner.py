@@ -30,12 +30,14 @@ Processes
     Every worker, of the pool or of a Dask cluster, runs one numba and one BLAS thread (:func:`limit_worker_threads`):
     the experiment parallelises over tasks, and a BLAS thread pool inside each of several workers costs far more
     than it gains on a run's (N, 3) x (3, 3) products (on this project's busy 2-core machine one such product of
-    84,000 rows took 23 ms with OpenBLAS's default threads and 0.5 ms with one).
+    84,000 rows took 23 ms with OpenBLAS's default threads and 0.5 ms with one). Every worker also keeps the
+    memory it frees for reuse (:func:`keep_freed_memory`): fresh mappings cost page faults on every walk.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import ctypes
 import functools
 import hashlib
 import json
@@ -398,10 +400,34 @@ def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
 
 
 def _start_worker(parent_pid: int) -> None:
-    """Worker initializer: one numba and one BLAS thread (:func:`limit_worker_threads`) and no life beyond the
-    parent's."""
+    """Worker initializer: one numba and one BLAS thread (:func:`limit_worker_threads`), freed memory kept for
+    reuse (:func:`keep_freed_memory`) and no life beyond the parent's."""
     limit_worker_threads()
+    keep_freed_memory()
     _die_with_parent(parent_pid)
+
+
+MMAP_THRESHOLD_BYTES = 32 * 2**20  # glibc's largest: blocks up to this size come from the heap
+TRIM_THRESHOLD_BYTES = 256 * 2**20  # free memory at the top of the heap kept before any goes back to the kernel
+
+
+def keep_freed_memory() -> None:
+    """Have glibc's malloc serve blocks of up to :data:`MMAP_THRESHOLD_BYTES` from its heap and keep up to
+    :data:`TRIM_THRESHOLD_BYTES` of freed memory there, for a worker that runs task after task.
+
+    A walk allocates and frees arrays of its 84,000 samples (1 to 20 MB each) hundreds of times; every block
+    mapped afresh from the kernel is paid again in page faults when first written (about a sixth of the truth's
+    CPU time). Dask's nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also pins the mmap
+    threshold at 128 kB, so there every such array is mapped anew. Memory only, no numbers change. Nothing
+    happens where the C library is not glibc.
+    """
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+    except OSError:
+        return
+    m_trim_threshold, m_mmap_threshold = -1, -3  # mallopt parameters (malloc.h)
+    libc.mallopt(m_mmap_threshold, MMAP_THRESHOLD_BYTES)
+    libc.mallopt(m_trim_threshold, TRIM_THRESHOLD_BYTES)
 
 
 def limit_worker_threads() -> None:
@@ -482,8 +508,9 @@ def _dask_outcomes(fn, tasks, pending, scheduler) -> Iterator[_Outcome]:
 
 def _execute_on_cluster(fn: Callable[[dict], dict], task: dict) -> tuple[bool, str]:
     """:func:`_execute` on a Dask worker, in the worker's task thread under :func:`limit_worker_threads` (about
-    2 ms per task)."""
+    2 ms per task) and :func:`keep_freed_memory`."""
     limit_worker_threads()
+    keep_freed_memory()
     return _execute(fn, task)
 
 

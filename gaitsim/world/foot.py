@@ -104,13 +104,13 @@ class FootModel:
         vel, ang_rate = np.asarray(qvel, float)[:, :3], np.asarray(qvel, float)[:, 3:]
         acc, ang_acc = np.asarray(qacc, float)[:, :3], np.asarray(qacc, float)[:, 3:]
         cz, sz, cy, sy = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-        zero = np.zeros_like(yaw)
-        axes = np.stack([np.stack([zero, zero, zero + 1.0], -1),  # yaw axis e_z
-                         np.stack([-sz, cz, zero], -1),  # pitch axis e_y' = Rz e_y
-                         np.stack([cz * cy, sz * cy, -sy], -1)])  # roll axis e_x'' = Rz Ry e_x
+        axes = np.zeros((3, yaw.size, 3))
+        axes[0, :, 2] = 1.0  # yaw axis e_z
+        axes[1, :, 0], axes[1, :, 1] = -sz, cz  # pitch axis e_y' = Rz e_y
+        axes[2, :, 0], axes[2, :, 1], axes[2, :, 2] = cz * cy, sz * cy, -sy  # roll axis e_x'' = Rz Ry e_x
         w_yaw_pitch = ang_rate[:, :1] * axes[0] + ang_rate[:, 1:2] * axes[1]
         w = w_yaw_pitch + ang_rate[:, 2:] * axes[2]
-        axes_rate = np.stack([np.cross(ang_rate[:, :1] * axes[0], axes[1]), np.cross(w_yaw_pitch, axes[2])])
+        axes_rate = np.stack([cross(ang_rate[:, :1] * axes[0], axes[1]), cross(w_yaw_pitch, axes[2])])
         w_dot = (np.einsum("nj,jni->ni", ang_acc, axes) + ang_rate[:, 1:2] * axes_rate[0]
                  + ang_rate[:, 2:] * axes_rate[1])
         body = quat.from_euler_zyx(yaw, pitch, roll)
@@ -118,8 +118,8 @@ class FootModel:
         lever = quat.rotate(body, np.broadcast_to(m.site_pos[site], w.shape))
         q = continuous_sign(quat.multiply(body, np.broadcast_to(m.site_quat[site], body.shape)))
         site_to_world = quat.to_matrix(q)
-        world_acc = acc + np.cross(w_dot, lever) + np.cross(w, np.cross(w, lever))
-        return SiteSamples(pos=np.asarray(qpos, float)[:, :3] + lever, vel=vel + np.cross(w, lever), quat=q,
+        world_acc = acc + cross(w_dot, lever) + cross(w, cross(w, lever))
+        return SiteSamples(pos=np.asarray(qpos, float)[:, :3] + lever, vel=vel + cross(w, lever), quat=q,
                            gyr=np.einsum("nji,nj->ni", site_to_world, w),
                            acc=np.einsum("nji,nj->ni", site_to_world, world_acc - m.opt.gravity))
 
@@ -160,6 +160,14 @@ class FootModel:
         q = out[:, s["quat"]]
         q = continuous_sign(q)
         return SiteSamples(pos=out[:, s["pos"]], vel=out[:, s["vel"]], quat=q, gyr=out[:, s["gyr"]], acc=out[:, s["acc"]])
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (N, 3) arrays: numpy's arithmetic (``a1 b2 - a2 b1``, ...) without its
+    broadcasting machinery."""
+    a0, a1, a2 = a.T
+    b0, b1, b2 = b.T
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def continuous_sign(q: np.ndarray) -> np.ndarray:

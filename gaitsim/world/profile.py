@@ -20,6 +20,7 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -149,8 +150,9 @@ class RollingSole:
         if mid.any():
             u = (theta[mid] + b) / (2 * b)
             value = self._rows[:, -1:] + u * 0  # numpy.polynomial.polynomial.polyval on every row
-            for column in self._rows[:, -2::-1].T:
-                value = column[:, None] + value * u
+            for column in self._rows[:, -2::-1].T:  # value = column + value u, in place
+                value *= u
+                value += column[:, None]
             height[:, mid] = value[:-1]
             travel[0, mid] = value[-1]
         toe = theta >= b
@@ -178,8 +180,58 @@ class RollingSole:
         return self._stacks(np.asarray(pitch, float))[1][0]
 
 
+class StancePieces:
+    """One function per listed stance, each added to the samples of its own stance only.
+
+    Parameters
+    ----------
+    stances : (M,) int, the stances that have a function, increasing.
+    functions : M :class:`smooth.Piecewise` of the same degree (packed in one :class:`smooth.PieceTable`), or
+        M lists of other functions with a ``stack(t)`` method (e.g. :class:`smooth.Ringing`), evaluated one by
+        one.
+    """
+
+    def __init__(self, stances, functions: list):
+        self.stances = np.asarray(stances, int)
+        self.functions = functions
+        self.table = smooth.PieceTable(functions) if isinstance(functions[0], smooth.Piecewise) else None
+
+    def add_to(self, out: np.ndarray, t: np.ndarray, stance: np.ndarray) -> None:
+        """``out`` (5, N) += the stacks at increasing times ``t`` (N,) s of the functions of the stances
+        ``stance`` (N,) int, non-decreasing; samples of a stance without a function are left alone."""
+        start = np.searchsorted(stance, self.stances, side="left")
+        stop = np.searchsorted(stance, self.stances, side="right")
+        if self.table is not None:
+            self.table.add_to(out, t, start, stop)
+            return
+        for a, b, pieces in zip(start, stop, self.functions):
+            for piece in pieces:
+                out[:, a:b] += piece.stack(t[a:b])
+
+
+@dataclass
+class StanceRotation:
+    """Foot-flat roll and yaw of the walking stances: per axis, the kinds of pieces in the order added.
+
+    Attributes
+    ----------
+    stances : (M,) int, the walking stances.
+    t0, t1 : (M,) s, each stance's span, from its first piece's start to its last piece's end (disjoint).
+    roll, yaw : lists of StancePieces (rad).
+    """
+
+    stances: np.ndarray
+    t0: np.ndarray
+    t1: np.ndarray
+    roll: list[StancePieces]
+    yaw: list[StancePieces]
+
+
 class FootTrajectory:
     """Joint trajectories of one walk.
+
+    The pieces of the same kind of all stances (or swings) are packed and evaluated together: every sample
+    gets the same arithmetic as from its own stance's pieces one by one.
 
     Parameters
     ----------
@@ -194,43 +246,43 @@ class FootTrajectory:
         n = plan.n_strides
         self.walk_yaw = np.unwrap(plan.yaw)
         self.foot_yaw = self.walk_yaw + g.toe_out
-        self.frames = [_rot_z(y) for y in self.walk_yaw]
+        self.frames = np.array([_rot_z(y) for y in self.walk_yaw])  # (n+1, 3, 3) walking frame -> world
+        self.heading = np.array([[np.cos(y), np.sin(y)] for y in self.foot_yaw])  # (n+1, 2) foot's heading
 
         self.pitch = pitch_profile(plan, g, imp, mm)
         self.sole = RollingSole(toe_length, mm.contact_transfer_pitch, mm.contact_radius_m)
 
-        # stance contact displacement (walking frame): heel-strike compression, impact ringing, creep
+        # stance contact displacement (walking frame), per axis in the order added: heel-strike compression,
+        # impact ringing (vertical), creep
         v_hs = np.asarray(imp.heel_strike_velocity_mps, float)
         self.compression = v_hs * imp.heel_strike_duration_s / 2
-        self.contact: list[list[list[smooth.Piecewise]]] = []  # [stance][axis] -> pieces
-        for k in range(n + 1):
-            axes: list[list[smooth.Piecewise]] = [[], [], []]
-            if k > 0:
-                t0, t1 = plan.t_ic[k], plan.t_ic[k] + imp.heel_strike_duration_s
-                for a in range(3):
-                    axes[a].append(smooth.hermite([t0, t1], [[0, v_hs[a], 0, 0, 0], [self.compression[a], 0, 0, 0, 0]]))
-            if k > 0 and imp.ringing_hz > 0 and imp.ringing_accel_mps2 != 0:
-                axes[2] += [smooth.Ringing(t_event, imp.ringing_hz, imp.ringing_damping, imp.ringing_accel_mps2)
-                            for t_event in (plan.t_ic[k], plan.t_ff[k])]
-            if plan.walking[k] and mm.enabled:
-                for a in np.flatnonzero(mm.creep_velocity_mps):
-                    axes[a].append(smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
-                                                               mm.creep_velocity_mps[a]))
-            self.contact.append(axes)
+        strikes = np.arange(1, n + 1)
+        self.contact: list[list[StancePieces]] = [[] for _ in range(3)]
+        if n:
+            for a in range(3):
+                self.contact[a].append(StancePieces(strikes, [
+                    smooth.hermite([plan.t_ic[k], plan.t_ic[k] + imp.heel_strike_duration_s],
+                                   [[0, v_hs[a], 0, 0, 0], [self.compression[a], 0, 0, 0, 0]]) for k in strikes]))
+            if imp.ringing_hz > 0 and imp.ringing_accel_mps2 != 0:
+                self.contact[2].append(StancePieces(strikes, [
+                    [smooth.Ringing(t_event, imp.ringing_hz, imp.ringing_damping, imp.ringing_accel_mps2)
+                     for t_event in (plan.t_ic[k], plan.t_ff[k])] for k in strikes]))
+        creeping = np.flatnonzero(plan.walking) if mm.enabled else np.zeros(0, int)
+        if creeping.size:
+            for a in np.flatnonzero(mm.creep_velocity_mps):
+                self.contact[a].append(StancePieces(creeping, [
+                    smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
+                                                mm.creep_velocity_mps[a]) for k in creeping]))
         self.rotation = self._build_stance_rotation()
-        self.heel_base = [
+        self.heel_base = np.array([
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
             for k in range(n + 1)
-        ]
-        ends = []  # (3, 5, 2) heel stacks at each stance's initial contact and toe off
-        for k in range(n + 1):
-            t_ends = np.array([plan.t_ic[k], plan.t_to[k]])
-            ends.append(self._stance_heel(k, t_ends, self.pitch.stack(t_ends)))
-        self._swings = [self._build_swing(k, ends[k][:, :, 1], ends[k + 1][:, :, 0]) for k in range(n)]
-        # swing turns of the foot: yaw to the next stance, roll bump
-        self._swing_yaw = [smooth.smoothstep(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], 0.0,
-                                             self.foot_yaw[k + 1] - self.foot_yaw[k]) for k in range(n)]
-        self._swing_roll = [smooth.lift(plan.t_to[k], plan.t_ic[k + 1] - plan.t_to[k], g.swing_roll) for k in range(n)]
+        ])
+        # heel stacks at each stance's initial contact and toe off: (3, 5, 2 (n+1)), ic and to of each in turn
+        t_ends = np.stack([plan.t_ic, plan.t_to], axis=1).ravel()
+        ends = self._stance_heel(t_ends, self.pitch.stack(t_ends), np.repeat(np.arange(n + 1), 2))
+        if n:
+            self._build_swings(ends)
         self.stance_roll = self._build_stance_roll()
 
     def _build_stance_roll(self) -> smooth.Piecewise | None:
@@ -249,20 +301,21 @@ class FootTrajectory:
                        [edge, -rate, -2 * rate / flat, 0, 0], [0, 0, 0, 0, 0]]
         return smooth.hermite(np.array(knots), np.array(stacks, float))
 
-    def _build_stance_rotation(self) -> dict | None:
-        """Roll and yaw of the foot flat per walking stance k: lists of angle pieces (rad) for roll (the
-        pronation held through foot flat and the loading pulse, a left foot's mirrored for a right one, plus
-        the sustained rotation's roll) and yaw (the sustained rotation's), each ending with the return of the
-        angle reached by heel off to zero over the following swing. (The sustained pitch is part of the heel
-        rise: :func:`heel_rise_rates`.)"""
+    def _build_stance_rotation(self) -> StanceRotation | None:
+        """Roll and yaw of the foot flat of the walking stances: the pieces (rad) of roll (the pronation held
+        through foot flat and the loading pulse, a left foot's mirrored for a right one, plus the sustained
+        rotation's roll) and of yaw (the sustained rotation's), each ending with the return of the angle reached
+        by heel off to zero over the following swing. (The sustained pitch is part of the heel rise:
+        :func:`heel_rise_rates`.)"""
         plan, mm = self.plan, self.walk.micro
         mirror = -1.0 if mm.foot == "right" else 1.0
         roll, yaw = np.asarray(mm.stance_rotation_rate, float)[[0, 2]]
         if not (mm.enabled and (roll or yaw or mm.pronation_rate or mm.loading_roll_rate) and plan.walking.any()):
             return None
         ramp = mm.creep_ramp_s
-        out = {}
-        for k in np.flatnonzero(plan.walking):
+        walking = np.flatnonzero(plan.walking)
+        per_stance = []  # ([held roll, loading, return], [held yaw, return]) of each walking stance
+        for k in walking:
             scale = mirror * plan.rate_scale[k, 1]
             held = [smooth.plateau_displacement(plan.t_ff[k] + ramp, plan.t_ho[k] - ramp, ramp, rate)
                     for rate in (roll + scale * mm.pronation_rate, yaw)]
@@ -272,117 +325,136 @@ class FootTrajectory:
             swing = plan.t_ic[k + 1] - plan.t_to[k]
             for axis in pieces:
                 axis.append(smooth.smoothstep(plan.t_to[k], swing, 0.0, -sum(p.after for p in axis)))
-            out[int(k)] = pieces
-        return out
+            per_stance.append(pieces)
+        roll_pieces, yaw_pieces = ([StancePieces(walking, [s[a][i] for s in per_stance])
+                                    for i in range(len(per_stance[0][a]))] for a in range(2))
+        return StanceRotation(walking, np.array([min(p.t0 for axis in s for p in axis) for s in per_stance]),
+                              np.array([max(p.t1 for axis in s for p in axis) for s in per_stance]),
+                              roll_pieces, yaw_pieces)
 
-    def _rotation_of(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(2, 5, N) stacks at increasing times ``t`` (s) of stance k's foot-flat (roll, yaw) angles, rad: zero
-        before its foot flat, rising through it, held through the push-off, returned to zero over the following
-        swing; each piece is evaluated on its own window only."""
+    def _rotation_stack(self, t: np.ndarray, stance: np.ndarray) -> np.ndarray:
+        """(2, 5, N) stacks at times ``t`` (N,) s of the foot-flat (roll, yaw) angles (rad) of the stances
+        ``stance`` (N,) int: zero before the stance's foot flat, rising through it, held through the push-off,
+        returned to zero over the following swing; zero for a stance without them."""
         out = np.zeros((2, smooth.NDER, t.size))
-        if self.rotation is None or k not in self.rotation:
-            return out
-        for a, pieces in enumerate(self.rotation[k]):
+        for a, pieces in enumerate((self.rotation.roll, self.rotation.yaw) if self.rotation else ()):
             for piece in pieces:
-                smooth.accumulate(out[a], t, piece.t0, piece.t1, piece.stack)
+                piece.add_to(out[a], t, stance)
         return out
 
     # -- pieces ---------------------------------------------------------------------------------------------
 
-    def _contact_stack(self, k: int, t: np.ndarray) -> np.ndarray:
-        """(3, 5, N) world-frame derivative stacks of the stance-k contact displacement at increasing times ``t``
-        (s); each piece is evaluated on its own window only."""
+    def _stance_heel(self, t: np.ndarray, pitch: np.ndarray, stance: np.ndarray) -> np.ndarray:
+        """(3, 5, N) heel point at times ``t`` (N,) s within [t_ic, t_to] of the stances ``stance`` (N,) int,
+        non-decreasing, given the pitch stack (5, N) there: the contact displacement plus the roll on the sole
+        along the foot's heading (:class:`RollingSole`); a sustained yaw turns that rolling offset about the
+        vertical through the yaw pivot (a point on the level foot's heel-toe line, carried by the contact
+        displacement)."""
         local = np.zeros((3, smooth.NDER, t.size))
         for a in range(3):
-            for piece in self.contact[k][a]:
-                smooth.accumulate(local[a], t, piece.t0, piece.t1, piece.stack)
-        return np.einsum("ij,jdn->idn", self.frames[k], local)
-
-    def _stance_heel(self, k: int, t: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-        """(3, 5, N) heel point during [t_ic, t_to] of stance k, given the pitch stack (5, N) at ``t``: the
-        contact displacement plus the roll on the sole along the foot's heading (:class:`RollingSole`); a
-        sustained yaw turns that rolling offset about the vertical through the yaw pivot (a point on the level
-        foot's heel-toe line, carried by the contact displacement)."""
-        out = self._contact_stack(k, t)
-        out[:, 0] += self.heel_base[k][:, None]
+            for pieces in self.contact[a]:
+                pieces.add_to(local[a], t, stance)
+        frame = np.ascontiguousarray(self.frames[stance].transpose(1, 2, 0))  # (3, 3, N) walking frame -> world
+        out = np.stack([frame[i, 0] * local[0] + frame[i, 1] * local[1] + frame[i, 2] * local[2] for i in range(3)])
+        out[:, 0] += self.heel_base[stance].T
         travel, height = self.sole.heel(pitch)
-        heading = np.array([np.cos(self.foot_yaw[k]), np.sin(self.foot_yaw[k])])
-        rolled = heading[:, None, None] * travel
+        heading = self.heading[stance].T  # (2, N)
+        rolled = heading[:, None, :] * travel
         out[2] += height
-        if self.rotation is not None and k in self.rotation and self.walk.micro.stance_rotation_rate[2]:  # a yaw
-            arm = self.walk.micro.stance_yaw_pivot_frac * self.toe_length * heading
-            rolled[:, 0] -= arm[:, None]
-            cos_y, sin_y = smooth.compose_trig(self._rotation_of(k, t)[1])
-            rolled = np.stack([smooth.product(cos_y, rolled[0]) - smooth.product(sin_y, rolled[1]),
-                               smooth.product(sin_y, rolled[0]) + smooth.product(cos_y, rolled[1])])
-            rolled[:, 0] += arm[:, None]
+        if self.rotation is not None and self.walk.micro.stance_rotation_rate[2]:  # a yaw in the walking stances
+            turned = np.isin(stance, self.rotation.stances)
+            arm = self.walk.micro.stance_yaw_pivot_frac * self.toe_length * heading[:, turned]
+            offset = rolled[:, :, turned]
+            offset[:, 0] -= arm
+            cos_y, sin_y = smooth.compose_trig(self._rotation_stack(t[turned], stance[turned])[1])
+            offset = np.stack([smooth.product(cos_y, offset[0]) - smooth.product(sin_y, offset[1]),
+                               smooth.product(sin_y, offset[0]) + smooth.product(cos_y, offset[1])])
+            offset[:, 0] += arm
+            rolled[:, :, turned] = offset
         out[:2] += rolled
         return out
 
-    def _build_swing(self, k: int, start: np.ndarray,
-                     end: np.ndarray) -> tuple[list[smooth.Piecewise], smooth.Piecewise, smooth.Piecewise]:
-        """Swing k's heel-point Hermites (x, y, z) from ``start`` (3, 5), the heel's derivative stacks at toe
-        off, to ``end`` (3, 5) at the next initial contact; its lift (raising the mid-swing heel to
-        ``swing_height_m``) and its sideways excursion."""
-        g = self.walk.gait
-        t0, t1 = self.plan.t_to[k], self.plan.t_ic[k + 1]
-        pieces = [smooth.hermite([t0, t1], [start[a], end[a]]) for a in range(3)]
-        z_mid = pieces[2].stack(np.array([0.5 * (t0 + t1)]))[0, 0]
-        return pieces, smooth.lift(t0, t1 - t0, g.swing_height_m - z_mid), smooth.lift(t0, t1 - t0, g.swing_lateral_m)
+    def _build_swings(self, ends: np.ndarray) -> None:
+        """The swings' pieces, each kind packed in a :class:`smooth.PieceTable`: the heel point's Hermites
+        (x, y, z), each from the heel's derivative stacks at toe off to those at the next initial contact
+        (``ends`` (3, 5, 2 (n+1)): each stance's at initial contact and at toe off in turn), the lifts (raising
+        the mid-swing heel to ``swing_height_m``) and sideways excursions (along each swing's mean walking
+        direction turned left), and the foot's turns: yaw to the next stance, roll bump."""
+        g, n, yaw = self.walk.gait, self.plan.n_strides, self.foot_yaw
+        t0, t1 = self.plan.t_to[:-1], self.plan.t_ic[1:]
+        self._swing_path = [smooth.PieceTable([smooth.hermite([t0[k], t1[k]], [ends[a, :, 2 * k + 1],
+                                                                               ends[a, :, 2 * k + 2]])
+                                               for k in range(n)]) for a in range(3)]
+        z_mid = self._swing_path[2].stack(0.5 * (t0 + t1), np.arange(n))[0]
+        self._swing_lift = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_height_m - z_mid[k])
+                                              for k in range(n)])
+        self._swing_side = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_lateral_m) for k in range(n)])
+        mid_yaw = [0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1]) for k in range(n)]
+        self._swing_sin = np.array([np.sin(y) for y in mid_yaw])
+        self._swing_cos = np.array([np.cos(y) for y in mid_yaw])
+        self._swing_yaw = smooth.PieceTable([smooth.smoothstep(t0[k], t1[k] - t0[k], 0.0, yaw[k + 1] - yaw[k])
+                                             for k in range(n)])
+        self._swing_roll = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_roll) for k in range(n)])
 
-    def _swing_heel(self, k: int, t: np.ndarray) -> np.ndarray:
-        pieces, lift, side = self._swings[k]
-        out = np.stack([p.stack(t) for p in pieces])
-        out[2] += lift.stack(t)
-        mid_yaw = 0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1])
-        lateral = side.stack(t)
-        out[0] -= np.sin(mid_yaw) * lateral
-        out[1] += np.cos(mid_yaw) * lateral
+    def _swing_heel(self, t: np.ndarray, swing: np.ndarray) -> np.ndarray:
+        """(3, 5, N) heel point at times ``t`` (N,) s within the swings ``swing`` (N,) int."""
+        out = np.stack([path.stack(t, swing) for path in self._swing_path])
+        out[2] += self._swing_lift.stack(t, swing)
+        lateral = self._swing_side.stack(t, swing)
+        out[0] -= self._swing_sin[swing] * lateral
+        out[1] += self._swing_cos[swing] * lateral
         return out
 
     # -- public ---------------------------------------------------------------------------------------------
 
-    def _heel(self, ts: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-        """(3, 5, N) derivative stacks of the heel contact point (m, world) at increasing times ``ts`` (s), given
-        the pitch stack (5, N) there."""
+    def _heel(self, ts: np.ndarray, pitch: np.ndarray, out: np.ndarray) -> None:
+        """Write into ``out`` (3, 5, N), zero on entry, the derivative stacks of the heel contact point (m, world)
+        at increasing times ``ts`` (s), given the pitch stack (5, N) there."""
         plan = self.plan
         # stance k: [t_ic[k], t_to[k]) (the last to the end); swing k: [t_to[k], t_ic[k + 1])
         ic, to = np.searchsorted(ts, plan.t_ic), np.searchsorted(ts, plan.t_to)
         n = plan.n_strides
-        out = np.zeros((3, smooth.NDER, ts.size))
-        for k in range(n + 1):
-            stance = slice(ic[k], to[k] if k < n else ts.size)
-            if stance.start < stance.stop:
-                out[:, :, stance] = self._stance_heel(k, ts[stance], pitch[:, stance])
-            if k < n and to[k] < ic[k + 1]:
-                out[:, :, to[k]:ic[k + 1]] = self._swing_heel(k, ts[to[k]:ic[k + 1]])
-        return out
+        rows = np.arange(ts.size)
+        k = np.searchsorted(ic, rows, side="right") - 1  # the last stance begun by each sample
+        stance = (k >= 0) & ((k == n) | (rows < to[np.minimum(k, n)]))
+        swing = (k >= 0) & (k < n) & ~stance
+        out[:, :, stance] = self._stance_heel(ts[stance], pitch[:, stance], k[stance])
+        if swing.any():
+            out[:, :, swing] = self._swing_heel(ts[swing], k[swing])
 
-    def _angles(self, ts: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-        """(3, 5, N) derivative stacks of (yaw, pitch, roll) in rad at increasing times ``ts`` (s), given the
-        pitch stack (5, N) there; each piece is evaluated on its own window only."""
-        roll_yaw = np.zeros((2, smooth.NDER, ts.size))
-        roll, yaw = roll_yaw
+    def _angles(self, ts: np.ndarray, pitch: np.ndarray, out: np.ndarray) -> None:
+        """Write into ``out`` (3, 5, N), zero on entry, the derivative stacks of (yaw, pitch, roll) in rad at
+        increasing times ``ts`` (s), given the pitch stack (5, N) there; each piece is evaluated on its own
+        window only."""
+        plan = self.plan
+        yaw, roll = out[0], out[2]
+        roll_yaw = out[2::-2]  # a view of (roll, yaw)
         yaw[0] = self.foot_yaw[0]
-        for turn, bump in zip(self._swing_yaw, self._swing_roll):
-            smooth.accumulate(yaw, ts, turn.t0, turn.t1, turn.stack)
-            smooth.accumulate(roll, ts, bump.t0, bump.t1, bump.stack)
+        out[1] = pitch
+        if plan.n_strides:
+            smooth.accumulate(yaw, ts, plan.t_to[:-1], plan.t_ic[1:], self._swing_yaw.stack)
+            smooth.accumulate(roll, ts, plan.t_to[:-1], plan.t_ic[1:], self._swing_roll.stack)
         if self.stance_roll is not None:
-            smooth.accumulate(roll, ts, self.stance_roll.t0, self.stance_roll.t1, self.stance_roll.stack)
-        for k, pieces in (self.rotation or {}).items():
-            every = [p for axis in pieces for p in axis]
-            smooth.accumulate(roll_yaw, ts, min(p.t0 for p in every), max(p.t1 for p in every),
-                              lambda times, k=k: self._rotation_of(k, times))
-        return np.stack([yaw, pitch, roll])
+            smooth.accumulate(roll, ts, self.stance_roll.t0, self.stance_roll.t1,
+                              lambda times, _: self.stance_roll.stack(times))
+        if self.rotation is not None:
+            smooth.accumulate(roll_yaw, ts, self.rotation.t0, self.rotation.t1,
+                              lambda times, i: self._rotation_stack(times, self.rotation.stances[i]))
 
     def _sorted(self, t: np.ndarray, *parts) -> np.ndarray:
-        """The stacks ``parts`` (methods of (ts, pitch)) at times ``t`` (s) in any order, stacked: evaluated on
-        the sorted times with one evaluation of the pitch, returned in the order of ``t``."""
+        """The stacks ``parts`` (methods of (ts, pitch, out) writing three joints' stacks) at times ``t`` (s) in
+        any order, stacked: evaluated on the sorted times with one evaluation of the pitch, returned in the order
+        of ``t``."""
         t = np.asarray(t, float).ravel()
-        order = np.argsort(t, kind="stable")
-        ts = t[order]
+        in_order = bool(np.all(t[1:] >= t[:-1]))  # a sampled record: no permutation
+        order = None if in_order else np.argsort(t, kind="stable")
+        ts = t if in_order else t[order]
         pitch = self.pitch.stack(ts)
-        stacks = np.concatenate([part(ts, pitch) for part in parts])
+        stacks = np.zeros((3 * len(parts), smooth.NDER, t.size))
+        for i, part in enumerate(parts):
+            part(ts, pitch, stacks[3 * i:3 * i + 3])
+        if in_order:
+            return stacks
         out = np.empty_like(stacks)
         out[:, :, order] = stacks
         return out
@@ -401,7 +473,8 @@ class FootTrajectory:
         return foot_point(self.joints(np.asarray(t, float))[:, 0], lever_arm)
 
     def sample(self, t: np.ndarray, lever_arm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Joint stacks at times ``t`` (s) and the stance displacements of a foot point, in one evaluation.
+        """Joint stacks at times ``t`` (s) and the stance displacements of a foot point (the gait events are
+        evaluated apart, so the samples, usually in order already, need no permutation).
 
         Returns
         -------
@@ -410,10 +483,8 @@ class FootTrajectory:
             ``lever_arm`` (m, foot frame; the IMU site's for the truth).
         """
         p = self.plan
-        n = np.asarray(t).size
-        joints = self.joints(np.concatenate([np.asarray(t, float).ravel(), p.t_ff, p.t_ho]))
-        ff, ho = np.split(foot_point(joints[:, 0, n:], lever_arm), 2)
-        return joints[:, :, :n], ho - ff
+        ff, ho = np.split(foot_point(self.joints(np.concatenate([p.t_ff, p.t_ho]))[:, 0], lever_arm), 2)
+        return self.joints(t), ho - ff
 
 
 def foot_point(joints: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:

@@ -8,6 +8,8 @@ A *derivative stack* is an array ``(5, N)``: row ``j`` holds the j-th time deriv
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.polynomial import polynomial as P
 
@@ -39,17 +41,23 @@ class Piecewise:
         self.breaks = np.asarray(breaks, float)
         self.t0 = float(self.breaks[0])
         self.t1 = float(self.breaks[-1])
-        self.before = power_sum(self.coef[:, 0], 0.0)
-        self.after = power_sum(self.coef[:, -1], self.t1 - float(self.breaks[-2]))
         self._left = self.breaks[:-1]  # left end of each piece (s)
         self._interior = self.breaks[1:-1]  # breakpoints between pieces (s)
-        # coefficients of the function and its derivatives 1..4, highest power first, zero-padded: (k+1, 5, m)
-        order = self.coef.shape[0]
-        powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of coef
-        self._coef = np.zeros((order, NDER, self.coef.shape[1]))
-        self._coef[:, 0] = self.coef
-        for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
-            self._coef[1:, j] = (self._coef[:, j - 1] * powers)[:-1]
+
+    @functools.cached_property
+    def before(self) -> float:
+        """The value held before the breakpoint range."""
+        return float(power_sum(self.coef[:, 0], 0.0))
+
+    @functools.cached_property
+    def after(self) -> float:
+        """The value held after the breakpoint range."""
+        return float(power_sum(self.coef[:, -1], self.t1 - float(self.breaks[-2])))
+
+    @functools.cached_property
+    def _coef(self) -> np.ndarray:
+        """(k+1, 5, m) coefficients of the function and its derivatives 1..4 (:func:`derivative_table`)."""
+        return derivative_table(self.coef)
 
     @property
     def pp(self):
@@ -68,47 +76,152 @@ class Piecewise:
         inside = (t >= self.t0) & (t <= self.t1)
         if inside.any():
             ti = t[inside]
-            if self._interior.size:
+            if self._interior.size:  # each row of coefficients gathered for the samples as Horner needs it
                 piece = np.searchsorted(self._interior, ti, side="right")  # the last piece includes its right end
-                local = ti - self._left[piece]
-                coef = self._coef[:, :, piece]  # (k+1, 5, n)
+                out[:, inside] = _horner(self._coef, piece, ti - self._left[piece])
             else:  # one piece: its coefficients broadcast over the samples
-                local = ti - self._left[0]
-                coef = self._coef  # (k+1, 5, 1)
-            value = np.empty((NDER, ti.size))
-            value[:] = coef[0]
-            for c in coef[1:]:
-                value *= local
-                value += c
-            out[:, inside] = value
+                out[:, inside] = _horner(self._coef, None, ti - self._left[0])
         out[0, t < self.t0] = self.before
         out[0, t > self.t1] = self.after
         return out
 
 
-def accumulate(out: np.ndarray, t: np.ndarray, t0: float, t1: float, stack) -> None:
-    """``out += stack(t)`` in place, evaluating ``stack`` only on the samples in [t0, t1] and one on each side.
+def derivative_table(coef: np.ndarray) -> np.ndarray:
+    """(k+1, 5, m) coefficients, highest power first and zero-padded at the top, of the m pieces' polynomials
+    ``coef`` (k+1, m) and their derivatives 1..4."""
+    order = coef.shape[0]
+    powers = np.arange(order - 1, -1, -1, dtype=float)[:, None]  # power of each row of coef
+    table = np.zeros((order, NDER, coef.shape[1]))
+    table[:, 0] = coef
+    for j in range(1, NDER):  # d/dx c_r x^p_r = c_r p_r x^(p_r - 1): the term moves one row down
+        table[1:, j] = (table[:, j - 1] * powers)[:-1]
+    return table
 
-    For a function held constant outside [t0, t1] (derivatives zero there), e.g. a :class:`Piecewise` or a sum
-    of them: each outside sample gets the same row-0 value added as its neighbour beyond the window, rows 1..4
-    outside are left alone. That equals ``out += stack(t)`` bit for bit whenever rows 1..4 of ``out`` hold no
-    -0.0 (adding +0.0 changes nothing else), as in any sum started from ``np.zeros``.
+
+def _horner(coef: np.ndarray, piece: np.ndarray | None, local: np.ndarray) -> np.ndarray:
+    """(5, n) derivative stacks from the derivative coefficient table ``coef`` (k+1, 5, m) (highest power
+    first) of piece ``piece[i]`` (None: the only piece) at ``local[i]`` s from its left end: one Horner pass,
+    each row of coefficients gathered for the samples as it is needed."""
+    if piece is None:
+        rows = iter(coef)
+    elif np.all(piece[1:] >= piece[:-1]):  # samples in the order of the pieces: each row's columns repeated
+        counts = np.bincount(piece, minlength=coef.shape[2])
+        rows = (np.repeat(row, counts, axis=1) for row in coef)
+    else:
+        rows = (np.take(row, piece, axis=1) for row in coef)
+    value = np.empty((NDER, local.size))
+    value[:] = next(rows)
+    for c in rows:
+        value *= local
+        value += c
+    return value
+
+
+class PieceTable:
+    """Many :class:`Piecewise` functions of the same degree packed for one evaluation in which every sample
+    names its function: the stacks of each, bit for bit, in a handful of numpy calls instead of a handful per
+    function.
+
+    Parameters
+    ----------
+    functions : sequence of Piecewise, all with the same number of coefficients per piece.
+    """
+
+    def __init__(self, functions):
+        orders = {f.coef.shape[0] for f in functions}
+        if len(orders) != 1:
+            raise ValueError(f"a PieceTable packs functions of one degree; got {len(orders)} ({sorted(orders)})")
+        self._coef = derivative_table(np.concatenate([f.coef for f in functions], axis=1))  # (k+1, 5, pieces)
+        self._left = np.concatenate([f._left for f in functions])
+        counts = np.array([f.coef.shape[1] for f in functions])
+        self._first = np.concatenate([[0], np.cumsum(counts)[:-1]])  # each function's first piece
+        # interior breakpoints of each function, padded with +inf: (functions, most pieces - 1)
+        self._interior = np.full((len(functions), counts.max() - 1), np.inf)
+        for i, f in enumerate(functions):
+            self._interior[i, :f._interior.size] = f._interior
+        self.t0 = np.array([f.t0 for f in functions])
+        self.t1 = np.array([f.t1 for f in functions])
+        self.before = power_sum(np.stack([f.coef[:, 0] for f in functions], axis=1), 0.0)  # held values
+        self.after = power_sum(np.stack([f.coef[:, -1] for f in functions], axis=1),
+                               self.t1 - np.array([f.breaks[-2] for f in functions]))
+        nonzero = np.logical_or.reduceat(np.any(self._coef[:, 0] != 0.0, axis=0), self._first)
+        self._live = np.flatnonzero(nonzero)  # the functions not identically zero
+
+    def stack(self, t: np.ndarray, function: np.ndarray) -> np.ndarray:
+        """(5, N) derivative stacks at increasing times ``t`` (N,) s, sample i of function ``function[i]``
+        (non-decreasing): what that function's :meth:`Piecewise.stack` gives there."""
+        functions = np.arange(self.t0.size)
+        out = np.zeros((NDER, t.size))
+        self.add_to(out, t, np.searchsorted(function, functions, side="left"),
+                    np.searchsorted(function, functions, side="right"))
+        return out
+
+    def add_to(self, out: np.ndarray, t: np.ndarray, start: np.ndarray, stop: np.ndarray) -> None:
+        """``out`` (5, N) += the stack of function j on samples ``start[j]:stop[j]`` of the increasing times
+        ``t`` (N,) s, for every j (the runs disjoint and in order): inside a function's window its whole
+        stack, outside its held value in row 0; equal to adding its :meth:`Piecewise.stack` whenever ``out``
+        holds no -0.0 (so a function that is identically zero, whose stack is +-0, is skipped)."""
+        live = self._live
+        start, stop = start[live], stop[live]
+        lo = np.clip(np.searchsorted(t, self.t0[live], side="left"), start, stop)  # first sample with t >= t0
+        hi = np.clip(np.searchsorted(t, self.t1[live], side="right"), lo, stop)  # first sample with t > t1
+        inside = _ranges(lo, hi)
+        if inside.size:
+            ti, fi = t[inside], np.repeat(live, hi - lo)
+            # interior breakpoints <= t (Piecewise's searchsorted side="right"): the last piece includes its end
+            piece = self._first[fi] + (ti[:, None] >= self._interior[fi]).sum(axis=1)
+            value = _horner(self._coef, piece, ti - self._left[piece])
+            if inside.size == out.shape[1]:  # every sample inside its function's window
+                out += value
+            else:
+                out[:, inside] += value
+        out[0, _ranges(start, lo)] += np.repeat(self.before[live], lo - start)
+        out[0, _ranges(hi, stop)] += np.repeat(self.after[live], stop - hi)
+
+
+def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """The indices start[j], ..., stop[j] - 1 of every j, concatenated."""
+    counts = stop - start
+    return np.arange(counts.sum()) + np.repeat(start - (np.cumsum(counts) - counts), counts)
+
+
+def accumulate(out: np.ndarray, t: np.ndarray, t0, t1, stack) -> None:
+    """Add K functions, each held constant outside its own window [t0[j], t1[j]] (derivatives zero there), to
+    ``out`` in turn, evaluating each only on the samples in its window.
+
+    The windows are disjoint and in increasing order. Inside its window a function's stack is added; outside,
+    row 0 gets its held value there unless that value is +0.0 (adding +0.0 to a number that is not -0.0 changes
+    nothing). Each sample gets the held values and the stacks in the order of the functions, so the result
+    equals ``for j: out += stack_j(t)`` bit for bit whenever ``out`` holds no -0.0, as in any sum started from
+    ``np.zeros``.
 
     Parameters
     ----------
     out : (..., 5, N) derivative stacks, updated in place.
     t : (N,) s, increasing sample times.
-    t0, t1 : s, the window outside which the function is constant.
-    stack : callable mapping (n,) times (s) to (..., 5, n) derivative stacks.
+    t0, t1 : (K,) or scalar, s: the windows outside which the functions are constant.
+    stack : callable mapping increasing times (n,) s and the function of each (n,) int, non-decreasing (0 to
+        K-1), to (..., 5, n) derivative stacks.
     """
+    t0, t1 = np.atleast_1d(np.asarray(t0, float)), np.atleast_1d(np.asarray(t1, float))
+    if np.any(t0[1:] <= t1[:-1]):
+        raise ValueError("accumulate: the windows must be disjoint and in increasing order")
+    k = t0.size
+    if k == 0:
+        return
     lo, hi = np.searchsorted(t, t0, side="left"), np.searchsorted(t, t1, side="right")
-    first, last = max(lo - 1, 0), min(hi + 1, t.size)
-    part = stack(t[first:last])
-    out[..., lo:hi] += part[..., lo - first:hi - first]
-    if lo > 0:
-        out[..., 0, :lo] += part[..., 0, :1]
-    if hi < t.size:
-        out[..., 0, hi:] += part[..., 0, -1:]
+    inside = _ranges(lo, hi)
+    functions = np.arange(k)
+    # each function just before and just after its window (its held values), then on its window
+    held = stack(np.stack([np.nextafter(t0, -np.inf), np.nextafter(t1, np.inf)], axis=1).ravel(),
+                 np.repeat(functions, 2))[..., 0, :]
+    held = held.reshape(-1, k, 2)
+    adds = np.any((held != 0.0) | np.signbit(held), axis=0)  # (K, 2): a held value other than +0.0
+    for j in np.flatnonzero(adds[:, 1] & (hi < t.size)):  # a sample adds the held values of the windows before
+        out[..., 0, hi[j]:] += held[:, j, 1].reshape(out.shape[:-2] + (1,))  # it in order,
+    out[..., inside] += stack(t[inside], np.repeat(functions, hi - lo))  # its own window's stack,
+    for j in np.flatnonzero(adds[:, 0] & (lo > 0)):  # then the later ones' values before them
+        out[..., 0, :lo[j]] += held[:, j, 0].reshape(out.shape[:-2] + (1,))
 
 
 def _hermite_tail() -> np.ndarray:
@@ -122,6 +235,7 @@ def _hermite_tail() -> np.ndarray:
 
 _TAIL_INVERSE, _HEAD = _hermite_tail()
 _FACTORIALS = np.array([1.0, 1.0, 2.0, 6.0, 24.0])
+_POWERS = np.arange(2 * NDER)  # powers of u in the degree-9 Hermite
 
 
 def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
@@ -138,22 +252,23 @@ def hermite(knots: np.ndarray, stacks: np.ndarray) -> Piecewise:
     """
     knots = np.asarray(knots, float)
     stacks = np.asarray(stacks, float)
-    h = np.diff(knots)[:, None]
-    powers = h ** np.arange(NDER)
+    h = (knots[1:] - knots[:-1])[:, None]
+    powers = h ** _POWERS[:NDER]
     head = stacks[:-1] * powers / _FACTORIALS
     tail = (stacks[1:] * powers - head @ _HEAD.T) @ _TAIL_INVERSE.T
     a = np.concatenate([head, tail], axis=1)  # (K-1, 10) in u
-    coef = a / h ** np.arange(2 * NDER)  # in t - t_i
+    coef = a / h ** _POWERS  # in t - t_i
     return Piecewise(coef[:, ::-1].T.copy(), knots)
 
 
-def power_sum(column: np.ndarray, local: float) -> float:
-    """Value at ``local`` (s from the piece's left end) of one piece's polynomial (``column``: coefficients,
-    highest power first), summed from the lowest power up as :class:`scipy.interpolate.PPoly` evaluates it."""
+def power_sum(columns: np.ndarray, local) -> np.ndarray:
+    """Values at ``local`` (s from the pieces' left ends; scalar or one per column) of pieces' polynomials
+    (``columns`` (k+1,) or (k+1, F): coefficients, highest power first), summed from the lowest power up as
+    :class:`scipy.interpolate.PPoly` evaluates it."""
     value, power = 0.0, 1.0
-    for c in column[::-1].tolist():
-        value += c * power
-        power *= local
+    for c in np.asarray(columns, float)[::-1]:
+        value = value + c * power
+        power = power * local
     return value
 
 
@@ -163,7 +278,7 @@ def antiderivative(coef: np.ndarray, breaks: np.ndarray) -> np.ndarray:
     out = np.zeros((coef.shape[0] + 1, coef.shape[1]))
     out[:-1] = coef / np.arange(coef.shape[0], 0, -1, dtype=float)[:, None]
     for i in range(1, coef.shape[1]):
-        out[-1, i] = power_sum(out[:, i - 1], float(breaks[i] - breaks[i - 1]))
+        out[-1, i] = power_sum(out[:, i - 1], breaks[i] - breaks[i - 1])
     return out
 
 
