@@ -35,9 +35,13 @@
    at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
-   Steps 4-5 repeat for at most ``settings.MAX_ROUNDS`` residuals. A significant residual that no effect of the
-   library moves (``rest_gyro_change``: a drifting bias) is reported unexplained before the rounds, without
-   using one (:func:`unmovable`).
+   Steps 4-5 repeat, each significant residual acted on once, until none is left or
+   ``settings.MAX_EFFECTS`` effects have been added. A residual left unexplained does not count against that
+   budget: it says what the twin cannot reproduce, and must not keep a smaller residual that an effect of the
+   library does explain from being acted on (a candidate's fit to the current twin is kept, so acting on
+   another residual re-fits only effects not tried on that twin yet). A significant residual that no effect of
+   the library moves (``rest_gyro_change``: a drifting bias) is reported unexplained before the rounds
+   (:func:`unmovable`).
 
 The predicted-versus-measured navigation discrepancy is ``|twin - recording|`` of each navigation metric,
 reported for the twin before any effect and after all accepted ones.
@@ -404,7 +408,7 @@ def _in_worker(task, *args):
     return task(_WORKER_SIMULATOR, *args)
 
 
-def run_loop(rec: Recording, max_rounds: int = settings.MAX_ROUNDS, log=lambda message: None,
+def run_loop(rec: Recording, max_effects: int = settings.MAX_EFFECTS, log=lambda message: None,
              axis_map: str | None = None, distance_m: float | None = None, workers: int = 1) -> LoopResult:
     """The whole loop on one recording (module docstring). ``log`` receives progress lines; ``axis_map`` is the
     ``--axes`` map and ``distance_m`` the ``--distance`` of the command line. ``workers`` processes run the
@@ -417,10 +421,10 @@ def run_loop(rec: Recording, max_rounds: int = settings.MAX_ROUNDS, log=lambda m
         for a recording the loop cannot use (:func:`prepare`; too few regular strides).
     """
     with Workers.started(workers) as pool:
-        return _run_loop(rec, max_rounds, Progress(log), axis_map, distance_m, pool)
+        return _run_loop(rec, max_effects, Progress(log), axis_map, distance_m, pool)
 
 
-def _run_loop(rec: Recording, max_rounds: int, progress: Progress, axis_map: str | None, distance_m: float | None,
+def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: str | None, distance_m: float | None,
               workers: Workers) -> LoopResult:
     rec, frame, ref = prepare(rec, axis_map, distance_m)
     simulate = workers.simulate
@@ -441,7 +445,9 @@ def _run_loop(rec: Recording, max_rounds: int, progress: Progress, axis_map: str
         acted_names.add(acted.name)
         attributions.append(_record(acted, None, False, []))
         progress.note(f"{acted.name} (z = {acted.z:.1f}): moved by no effect of the library, unexplained")
-    for round_number in range(1, max_rounds + 1):
+    round_number = 0
+    while len(used) < max_effects:
+        round_number += 1
         ranked = sorted((r for r in current.values() if r.name not in acted_names
                          and r.name not in settings.DERIVED and r.z > settings.NOISE_LEVEL),
                         key=lambda r: (r.name.startswith("nav_"), -r.z))

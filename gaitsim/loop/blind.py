@@ -17,7 +17,7 @@ the library: the loop must leave it unexplained.
 The same injections also go into shared measured recordings (:data:`MEASURED`: x-io's short walk, a walker the
 stance model was never fitted to, and gaitmap's right foot: real feet the twin reproduces only in part, with their
 own sensors' errors), for the effects a real recording's loop can be asked to see (:data:`MEASURED_CASES`), and
-are judged the same way against that recording's untouched run (the loop's default rounds).
+are judged the same way against that recording's untouched run (the loop's default budget of effects).
 """
 
 from __future__ import annotations
@@ -145,10 +145,10 @@ def blind_recording(source: str, case: BlindCase | None) -> Recording:
 
 
 def run(source: str, case: BlindCase | None) -> attribution.LoopResult:
-    """The loop on the blind recording (``settings.BLIND_ROUNDS`` rounds on a simulated sensor's walk, the
-    loop's default on a measured recording)."""
-    rounds = settings.MAX_ROUNDS if source in MEASURED else settings.BLIND_ROUNDS
-    return attribution.run_loop(blind_recording(source, case), max_rounds=rounds)
+    """The loop on the blind recording (at most ``settings.BLIND_EFFECTS`` effects on a simulated sensor's walk,
+    the loop's default on a measured recording)."""
+    most = settings.MAX_EFFECTS if source in MEASURED else settings.BLIND_EFFECTS
+    return attribution.run_loop(blind_recording(source, case), max_effects=most)
 
 
 def named_effects(result: attribution.LoopResult) -> dict:

@@ -40,8 +40,9 @@ def add_parser(subparsers) -> None:
                               description=__doc__)
     p.add_argument("dataset", help=f"one of {', '.join(CHOICES)}, or a recording folder")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--rounds", type=int, default=settings.MAX_ROUNDS,
-                   help=f"largest number of residuals acted on per recording (default {settings.MAX_ROUNDS})")
+    p.add_argument("--max-effects", type=int, default=settings.MAX_EFFECTS,
+                   help="largest number of effects added to a recording's twin; every significant residual is "
+                        f"acted on until then, 0 reports the residuals alone (default {settings.MAX_EFFECTS})")
     p.add_argument("--data", default=None, help="folder holding the shared datasets (default: $GAITSIM_DATA or "
                                                 "../shared/data)")
     p.add_argument("--axes", default=None, help="sensor axes as body x,y,z, e.g. 'y,-x,z' (default: as recorded)")
@@ -97,7 +98,7 @@ def _run_recordings(dataset: str, folder: Path, args, workers: int) -> tuple[lis
         sub = folder / label
         sub.mkdir(parents=True)
         try:
-            result = attribution.run_loop(read(), max_rounds=args.rounds, axis_map=args.axes, distance_m=args.distance,
+            result = attribution.run_loop(read(), max_effects=args.max_effects, axis_map=args.axes, distance_m=args.distance,
                                           log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True),
                                           workers=workers)
             doc = report.write_result(result, sub, f"{dataset} / {label}")
@@ -169,8 +170,8 @@ def _run_target(target: str, folder: Path, args, workers: int = 1) -> tuple[list
 
 def run(args) -> int:
     """Run the loop as the command line asked; returns the exit code (1 when any recording failed)."""
-    if args.rounds < 1:
-        raise ValueError(f"--rounds {args.rounds}: must be >= 1")
+    if args.max_effects < 0:
+        raise ValueError(f"--max-effects {args.max_effects}: must be >= 0")
     if args.jobs < 1:
         raise ValueError(f"--jobs {args.jobs}: must be >= 1")
     if args.axes is not None:
