@@ -10,9 +10,11 @@ untouched recording as well: what it names there is the sensor's own calibration
 (an effect it names there with the same name is compared by the change of its magnitude).
 
 The magnitude compared is the library's equivalent figure (``expected``): a gyro delay of tau is an
-``accel_gyro_skew`` of -tau (the library's skew samples the gyro later); a first-order low-pass is named by its
--3 dB frequency (either library low-pass); a mount rotation about z is ``mount_yaw``. The bias ramp is outside
-the library: the loop must leave it unexplained.
+``accel_gyro_skew`` of -tau (the library's skew samples the gyro later); a first-order low-pass (here the
+exponential smoothing of a sampled RC stage) is named by its cutoff, by any library low-pass (the forms differ
+most above a fifth of the sample rate: a digital Butterworth has a zero at the Nyquist frequency, an analogue
+stage none); a mount rotation about z is ``mount_yaw``. The bias ramp is outside the library: the loop must
+leave it unexplained.
 
 The same injections also go into shared measured recordings (:data:`MEASURED`: x-io's short walk, a walker the
 stance model was never fitted to, and gaitmap's right foot: real feet the twin reproduces only in part, with their
@@ -103,7 +105,7 @@ class BlindCase:
 
 CASES = (
     BlindCase("gyro_delay", gyro_delay, 4.0, "ms", ("accel_gyro_skew",), -4.0),
-    BlindCase("low_pass", low_pass, 25.0, "Hz", ("bandwidth_first_order", "bandwidth"), 25.0),
+    BlindCase("low_pass", low_pass, 25.0, "Hz", ("bandwidth_first_order", "bandwidth_analogue", "bandwidth"), 25.0),
     BlindCase("g_sensitivity", g_sensitivity, 0.02, "deg/s/(m/s^2)", ("g_sensitivity",), 0.02),
     BlindCase("gyro_scale_y", gyro_scale_y, 2.0, "%", ("gyro_scale_y",), 2.0),
     BlindCase("accel_scale_x", accel_scale_x, 2.0, "%", ("accel_scale_x",), 2.0),
