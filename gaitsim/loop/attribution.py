@@ -34,7 +34,11 @@
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
    at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
-   Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
+   Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record). The other
+   acceptable candidates whose misfit lies within ``settings.NOISE_LEVEL ** 2`` of the named one's (less than
+   one residual at the noise level adds) are reported with it as ``"equivalent"``: the recording does not tell
+   them apart (e.g. the low-pass forms, which differ most above a fifth of the sample rate, where the
+   comparison's noise is largest), and the named magnitude holds for the named form only.
    Steps 4-5 repeat, each significant residual acted on once, until none is left or
    ``settings.MAX_EFFECTS`` effects have been added. A residual left unexplained does not count against that
    budget: it says what the twin cannot reproduce, and must not keep a smaller residual that an effect of the
@@ -316,6 +320,14 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
                                total_after=residuals.signature_misfit(res))
 
 
+def equivalent(best: Fit, fits: list) -> list:
+    """The acceptable fits other than ``best`` whose signature misfit after lies within
+    ``settings.NOISE_LEVEL ** 2`` of ``best``'s, smallest misfit first (module docstring, step 5)."""
+    margin = best.total_after + settings.NOISE_LEVEL ** 2
+    return sorted((f for f in fits if f is not best and f.acceptable and f.total_after <= margin),
+                  key=lambda f: f.total_after)
+
+
 def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:
     after = best.residuals.get(acted.name) if (best is not None and accepted) else None
     return {
@@ -332,6 +344,7 @@ def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list)
         "fraction_explained": best.fraction if (best is not None and accepted) else
         (max(0.0, best.fraction) if best is not None else 0.0),
         "best_candidate": best.summary() if best is not None else None,
+        "equivalent": [c.summary() for c in equivalent(best, candidates)] if accepted else [],
         "candidates": [c.summary() for c in candidates],
     }
 
