@@ -9,6 +9,7 @@ here re-runs one case and checks it against the committed row. Each case is its 
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -94,3 +95,29 @@ def test_a_transferred_twin_that_shows_no_strides_scores_an_infinite_misfit():
     simulate = TwinSimulator()
     scored = transfer.transferred_score(result, [("bandwidth_first_order", 1.0), ("mount_yaw", 2.0)], simulate)
     assert scored["q_signature"] == float("inf") and "strides" in scored["failed"]
+
+
+def _result(*attributions):
+    """A loop result as the verdict reads it: the attribution records alone."""
+    return SimpleNamespace(attributions=list(attributions))
+
+
+def test_an_injected_effect_that_only_fits_as_well_as_the_named_one_is_not_counted_as_named():
+    """The verdict credits the injected effect when named within 25 %; when the loop named another form of it
+    and the injected form only fit as well (``equivalent``), the row says so and ``found`` stays False."""
+    low_pass, mount = blind.BY_NAME["low_pass"], blind.BY_NAME["mount_yaw"]
+    untouched = _result()
+    as_good = {"effect": "bandwidth_first_order", "magnitude": 36.0, "residual": "hf40",
+               "equivalent": [{"effect": "bandwidth_analogue", "magnitude": 24.5}]}
+    row = blind.verdict(low_pass, _result(as_good), untouched)
+    assert (row["found"], row["found_as"]) == (False, "equivalent")
+    far = {**as_good, "equivalent": [{"effect": "bandwidth_analogue", "magnitude": 33.0}]}
+    assert blind.verdict(low_pass, _result(far), untouched)["found_as"] is None
+    named = {**as_good, "effect": "bandwidth_analogue", "magnitude": 26.0, "equivalent": []}
+    assert (blind.verdict(low_pass, _result(named), untouched)["found_as"]) == "named"
+    other_family = {"effect": "gyro_scale_z", "magnitude": 3.0, "residual": "swing_axis_yaw",
+                    "equivalent": [{"effect": "mount_yaw", "magnitude": 6.1}]}
+    assert blind.verdict(mount, _result(other_family), untouched)["found_as"] is None
+    subtracted = {"effect": "mount_yaw", "magnitude": 10.0, "residual": "swing_axis_yaw", "equivalent": []}
+    row = blind.verdict(mount, _result(subtracted), _result({**subtracted, "magnitude": 4.0}))
+    assert row["found"] and row["found_magnitude"] == pytest.approx(6.0)

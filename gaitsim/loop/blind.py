@@ -158,6 +158,11 @@ def named_effects(result: attribution.LoopResult) -> dict:
     return {a["effect"]: a["magnitude"] for a in result.attributions if a["effect"] != "unexplained"}
 
 
+def equivalent_effects(result: attribution.LoopResult) -> dict:
+    """Effect name -> fitted magnitude of every candidate that fit as well as a named effect (``equivalent``)."""
+    return {e["effect"]: e["magnitude"] for a in result.attributions for e in a.get("equivalent", [])}
+
+
 def unexplained(result: attribution.LoopResult) -> list:
     """The residuals the loop left unexplained."""
     return [a["residual"] for a in result.attributions if a["effect"] == "unexplained"]
@@ -168,19 +173,32 @@ def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribut
     counts only when its magnitude moved by more than ``settings.BLIND_MAGNITUDE_TOLERANCE`` of the untouched
     one), and whether it is the injected effect within that tolerance of the expected figure. An effect
     outside the library is found when the loop names nothing beyond the untouched recording and leaves a
-    residual unexplained that it did not leave unexplained there."""
-    named, before = named_effects(result), named_effects(untouched)
-    new = {name: m - before.get(name, 0.0) for name, m in named.items()
-           if name not in before or abs(m - before[name]) > settings.BLIND_MAGNITUDE_TOLERANCE * abs(before[name])}
+    residual unexplained that it did not leave unexplained there. ``found_as`` says whether the injected effect
+    was named or only fit as well as the effect named (``equivalent``: the recording did not tell them apart);
+    ``found`` counts the named ones alone."""
+    before = named_effects(untouched)
+
+    def beyond(effects: dict) -> dict:
+        return {name: m - before.get(name, 0.0) for name, m in effects.items()
+                if name not in before or abs(m - before[name]) > settings.BLIND_MAGNITUDE_TOLERANCE * abs(before[name])}
+
+    new, alternatives = beyond(named_effects(result)), beyond(equivalent_effects(result))
     left = [name for name in unexplained(result) if name not in unexplained(untouched)]
     row = {"case": case.name, "injected": case.magnitude, "unit": case.unit, "expected_effect": "/".join(case.named),
-           "expected_magnitude": case.expected, "named_beyond_untouched": new, "unexplained_beyond_untouched": left}
+           "expected_magnitude": case.expected, "named_beyond_untouched": new,
+           "equivalent_beyond_untouched": alternatives, "unexplained_beyond_untouched": left}
     if case.named == ("unexplained",):
         row["found"] = bool(left) and not new
+        row["found_as"] = "unexplained" if row["found"] else None
         row["found_magnitude"] = math.nan
         return row
+
+    def close(magnitude: float) -> bool:
+        return abs(magnitude - case.expected) <= settings.BLIND_MAGNITUDE_TOLERANCE * abs(case.expected)
+
     hits = [(name, new[name]) for name in case.named if name in new]
     row["found_effect"], row["found_magnitude"] = hits[0] if hits else (None, math.nan)
-    row["found"] = bool(hits) and abs(hits[0][1] - case.expected) <= settings.BLIND_MAGNITUDE_TOLERANCE * abs(
-        case.expected)
+    row["found"] = bool(hits) and close(hits[0][1])
+    as_good = [name for name in case.named if name in alternatives and close(alternatives[name])]
+    row["found_as"] = "named" if row["found"] else ("equivalent" if hits and as_good else None)
     return row

@@ -122,6 +122,9 @@ def _run_held_out(dataset: str, folder: Path, results: dict) -> list[str]:
     return transfer.markdown_rows(dataset, rows)
 
 
+FOUND_AS = {"named": "yes", "unexplained": "yes", "equivalent": "as good as the effect named", None: "no"}
+
+
 def _run_blind(folder: Path) -> list[str]:
     """The blind table (:mod:`gaitsim.loop.blind`) of every simulated sensor and measured recording into
     ``folder``/blind.md and blind.json."""
@@ -134,23 +137,28 @@ def _run_blind(folder: Path) -> list[str]:
             row = {"sensor": source, "untouched_named": blind.named_effects(untouched),
                    **blind.verdict(case, blind.run(source, case), untouched)}
             rows.append(row)
-            found.append(row["found"])
-            print(f"blind {source} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
+            found.append(row["found_as"])
+            print(f"blind {source} {case.name}: found = {row['found_as']} {row['named_beyond_untouched']}", flush=True)
         inside = [f for f, c in zip(found, blind.cases(source)) if c.named != ("unexplained",)]
         outside = [f for f, c in zip(found, blind.cases(source)) if c.named == ("unexplained",)]
-        summary.append(f"{source}: {sum(inside)} of {len(inside)} library effects named within "
+        summary.append(f"{source}: {inside.count('named')} of {len(inside)} library effects named within "
                        f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}" +
-                       (f"; outside effect unexplained: {outside[0]}" if outside else ""))
+                       (f", {inside.count('equivalent')} more fit as well as the effect named"
+                        if "equivalent" in inside else "") +
+                       (f"; outside effect unexplained: {outside[0] is not None}" if outside else ""))
     write_json(folder / "blind.json", rows)
     lines = ["# Blind tests", "", blind.__doc__.strip(), ""] + [f"- {line}" for line in summary] + [
         "", "| recording | case | injected | expected | named beyond the untouched recording | found |",
         "|---|---|---|---|---|---|"]
     for r in rows:
         named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
+        if r["equivalent_beyond_untouched"]:
+            named += " (as good: " + ", ".join(
+                f"{k} {shown(v)}" for k, v in r["equivalent_beyond_untouched"].items()) + ")"
         if r["unexplained_beyond_untouched"]:
             named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
         lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
-                     f"{shown(r['expected_magnitude'])} | {named} | {'yes' if r['found'] else 'no'} |")
+                     f"{shown(r['expected_magnitude'])} | {named} | {FOUND_AS[r['found_as']]} |")
     untouched_named = {r["sensor"]: r["untouched_named"] for r in rows}
     lines += ["", "Named on the untouched recordings (subtracted): " + "; ".join(
         f"{s}: {named}" for s, named in untouched_named.items())]
