@@ -28,7 +28,8 @@
 5. of the candidates, the one that leaves the smallest misfit over all signature residuals
    (:func:`gaitsim.loop.residuals.signature_misfit`) is added to the twin when it lowers that misfit and its
    own Q, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to the noise
-   level, lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
+   level while making it smaller (a residual that grows but reads at the noise level only because the twin's
+   spread grew is not explained), lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
    bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
@@ -240,7 +241,8 @@ class Fit:
 
     @property
     def acceptable(self) -> bool:
-        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.acted_at_noise_level)
+        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION
+                                       or (self.acted_at_noise_level and self.fraction > 0.0))
                 and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed
                 and not self.at_bound)
 
