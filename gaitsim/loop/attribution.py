@@ -28,8 +28,9 @@
 5. of the candidates, the one that leaves the smallest misfit over all signature residuals
    (:func:`gaitsim.loop.residuals.signature_misfit`) is added to the twin when it lowers that misfit and its
    own Q, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to the noise
-   level while making it smaller (a residual that grows but reads at the noise level only because the twin's
-   spread grew is not explained), lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
+   level by moving it toward zero by at least its uncertainty (a residual just above the noise level that an
+   effect nudges below it, or that reads at the noise level only because the twin's spread grew, is not
+   explained), lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
    bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
@@ -224,7 +225,7 @@ class Fit:
     harmed: tuple = ()
     total_before: float = math.nan
     total_after: float = math.nan
-    acted_at_noise_level: bool = False
+    closes_acted: bool = False  # brings the acted residual to the noise level, moved by >= its uncertainty
     at_bound: bool = False
 
     def summary(self) -> dict:
@@ -242,7 +243,7 @@ class Fit:
     @property
     def acceptable(self) -> bool:
         return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION
-                                       or (self.acted_at_noise_level and self.fraction > 0.0))
+                                       or self.closes_acted)
                 and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed
                 and not self.at_bound)
 
@@ -317,7 +318,8 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
     harmed = tuple(n for n in res if n != acted and n in base
                    and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed,
-                               acted_at_noise_level=bool(acted in res and res[acted].at_noise_level),
+                               closes_acted=bool(acted in res and res[acted].at_noise_level
+                                                 and before - after >= base[acted].uncertainty),
                                total_before=residuals.signature_misfit(base),
                                total_after=residuals.signature_misfit(res))
 
