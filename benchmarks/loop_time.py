@@ -3,7 +3,7 @@
 
     PYTHONPATH=$PWD python3 benchmarks/loop_time.py [--recordings gaitmap-healthy/left xio-ngimu/short_walk]
 
-For each recording: :func:`gaitsim.loop.attribution.run_loop` with ``workers`` = 1 and 2 (the default rounds)
+For each recording: :func:`gaitsim.loop.attribution.run_loop` with ``workers`` = 1 and 2 (the default budget of effects)
 plus writing its report (:func:`gaitsim.loop.report.write_result`), each in this process, timed on the wall
 clock with the machine's load average before and after (timings are only comparable at a similar load). The
 attributions of the two runs are compared and must be identical: the worker count changes where the

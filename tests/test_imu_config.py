@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gaitsim.errors import ScenarioError
-from gaitsim.imu.config import changed_sensor, sensor_from_table
+from gaitsim.imu.config import changed_sensor, sensor_from_table, sensor_table
 from gaitsim.imu.presets import PAPER_G_SENSITIVITY, PRESET_NAMES, get_preset
 from gaitsim.imu.units import STANDARD_GRAVITY, to_si
 
@@ -121,3 +121,17 @@ def test_a_sensor_change_may_set_the_filter_order_and_nothing_else_plain():
         changed_sensor(base, {"filter_order": 0})
     with pytest.raises(ScenarioError, match="preset"):
         changed_sensor(base, {"preset": "vn200"})
+
+
+def test_the_filter_kind_is_read_checked_and_written_back():
+    """filter_kind: "digital" (default) or "analogue"; a sensor change may set it; the [sensor] table that
+    rebuilds a spec carries it when it is not the default."""
+    assert sensor_from_table({}).filter_kind == "digital"
+    spec = sensor_from_table({"preset": "bmi160", "filter_order": 1, "filter_kind": "analogue"})
+    assert spec.filter_kind == "analogue" and sensor_from_table(sensor_table(spec)).filter_kind == "analogue"
+    assert "filter_kind" not in sensor_table(get_preset("bmi160"))
+    assert changed_sensor(get_preset("bmi160"), {"filter_kind": "analogue"}).filter_kind == "analogue"
+    with pytest.raises(ScenarioError, match="filter_kind: expected one of \\['digital', 'analogue'\\], got 'rc'"):
+        sensor_from_table({"filter_kind": "rc"})
+    with pytest.raises(ScenarioError, match="filter_kind"):
+        changed_sensor(get_preset("bmi160"), {"filter_kind": 1})

@@ -143,6 +143,36 @@ def test_bandwidth_starts_in_steady_state_and_has_the_butterworth_gain():
     assert gain == pytest.approx(abs(h[0]), rel=2e-3)
 
 
+@pytest.mark.parametrize("order", [1, 2, 3])
+def test_an_analogue_low_pass_has_the_analogue_filter_s_poles_unit_dc_gain_and_no_zero_at_nyquist(order):
+    """filter_kind = "analogue": order 1 is the sampled RC stage y[k] = y[k-1] + a (x[k] - y[k-1]) with
+    a = 1 - exp(-2 pi f_c / fs); any order keeps a constant input unchanged from the first sample and passes the
+    Nyquist frequency, which the digital (bilinear) Butterworth of the same cutoff blocks."""
+    fc = 60.0
+    t = np.arange(8000) / RATE
+    still = np.tile([0.1, -0.2, 9.81], (t.size, 1))
+    analogue = dict(accel_bandwidth=fc, gyro_bandwidth=fc)
+    _, acc_m, _ = run(only(**analogue).replace(filter_order=order, filter_kind="analogue"), t, still,
+                      np.zeros_like(still))
+    np.testing.assert_allclose(acc_m, still, rtol=0, atol=1e-12)
+    alternating = np.column_stack([(-1.0) ** np.arange(t.size)] * 3)
+    gains = {}
+    for kind in ("analogue", "digital"):
+        _, _, gyr_m = run(only(**analogue).replace(filter_order=order, filter_kind=kind), t,
+                          np.zeros_like(alternating), alternating)
+        gains[kind] = np.abs(gyr_m[4000:, 0]).max()
+    assert gains["digital"] < 1e-6 < 0.01 < gains["analogue"]
+    if order == 1:
+        rng = np.random.default_rng(3)
+        x = rng.normal(size=(t.size, 3))
+        a = 1.0 - np.exp(-2.0 * np.pi * fc / RATE)
+        expected = x.copy()
+        for k in range(1, t.size):
+            expected[k] = expected[k - 1] + a * (x[k] - expected[k - 1])
+        _, _, gyr_m = run(only(**analogue).replace(filter_order=1, filter_kind="analogue"), t, np.zeros_like(x), x)
+        np.testing.assert_allclose(gyr_m, expected, rtol=0, atol=1e-12)
+
+
 def test_temperature_bias_and_scale_follow_the_ramp():
     t = np.arange(4000) / RATE
     acc = np.tile([1.0, -2.0, 9.81], (t.size, 1))

@@ -15,7 +15,7 @@ def loop_output(tmp_path_factory):
     base = tmp_path_factory.mktemp("loop")
     rec = blind.blind_recording("paper-vn200", blind.BY_NAME["accel_scale_x"])
     write_recording(Recording(rec.t, rec.acc, rec.gyr, meta={}), base / "rec")  # imu alone
-    assert main(["loop", str(base / "rec"), "--out", str(base / "out"), "--rounds", "2"]) == 0
+    assert main(["loop", str(base / "rec"), "--out", str(base / "out"), "--max-effects", "1"]) == 0
     return base
 
 

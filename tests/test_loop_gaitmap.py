@@ -29,7 +29,7 @@ def test_the_rolling_foot_predicts_the_measured_core_stance(foot):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the loader's data-quality counts are in meta
         rec = {r.meta["recording"]: r for r in load_dataset("gaitmap-healthy", DATA)}[foot]
-        result = attribution.run_loop(rec, max_rounds=1)
+        result = attribution.run_loop(rec, max_effects=0)
     res = result.residuals_before
     assert result.twin_before.scenario.walk.micro.foot == foot  # from the sign of the core-stance roll rate
     assert abs(res["stance_gyro"].value) < 4.5  # deg/s; still foot 8.1-8.7
@@ -46,7 +46,7 @@ def test_the_rolling_foot_predicts_a_foot_it_was_not_fitted_to():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rec = {r.meta["recording"]: r for r in load_dataset("xio-ngimu", DATA)}["short_walk"]
-        res = attribution.run_loop(rec, max_rounds=1).residuals_before
+        res = attribution.run_loop(rec, max_effects=0).residuals_before
     assert abs(res["stance_gyro"].value) < 4.5  # deg/s; still foot 8.2
     assert abs(res["stance_shoe"].value) < 0.6  # log10; still foot 2.5
     assert abs(res["stance_rate_y"].value) < 2.5  # deg/s; still foot 3.8

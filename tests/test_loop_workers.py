@@ -17,10 +17,10 @@ def test_a_library_effect_is_pickled_as_the_library_entry(name):
 
 
 def test_a_sensor_spec_comes_back_equal_and_read_only():
-    spec = get_preset("bmi160").replace(filter_order=1, accel_bandwidth=30.0)
+    spec = get_preset("bmi160").replace(filter_order=1, filter_kind="analogue", accel_bandwidth=30.0)
     back = pickle.loads(pickle.dumps(spec))
-    assert (back.name, back.source, back.filter_order, back.withheld) == (
-        spec.name, spec.source, spec.filter_order, spec.withheld)
+    assert (back.name, back.source, back.filter_order, back.filter_kind, back.withheld) == (
+        spec.name, spec.source, spec.filter_order, "analogue", spec.withheld)
     for key, value in spec.parameters.items():
         np.testing.assert_array_equal(back[key], value)
         assert not back[key].flags.writeable

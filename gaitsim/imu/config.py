@@ -18,6 +18,7 @@ bandwidth off. Values are converted once to SI (:mod:`gaitsim.imu.units`).
 | preset | string | ideal, vn200, paper-vn200, bmi160, adis16497 (default ideal) |
 | withhold | bool | - |
 | filter_order | int 1..8 | Butterworth order of the bandwidth low-pass (default 2) |
+| filter_kind | "digital" or "analogue" | the low-pass is the sensor's digital filter or an analogue front end (default digital) |
 | accel_noise_density | axes | m/s^2/sqrt(Hz), m/s/sqrt(s), m/s/sqrt(h), mg/sqrt(Hz), ug/sqrt(Hz) |
 | gyro_noise_density | axes | rad/s/sqrt(Hz), rad/sqrt(s), deg/s/sqrt(Hz), deg/h/sqrt(Hz), deg/sqrt(h), deg/sqrt(s) |
 | accel_bias, accel_bias_repeatability, accel_bias_instability | axes | m/s^2, mm/s^2, g, mg, ug |
@@ -48,11 +49,12 @@ from __future__ import annotations
 import numpy as np
 
 from gaitsim.errors import ScenarioError
-from gaitsim.imu.model import PARAMETERS, SensorSpec
+from gaitsim.imu.model import FILTER_KINDS, PARAMETERS, SensorSpec
 from gaitsim.imu.presets import PRESET_NAMES, get_preset
 from gaitsim.imu.units import accepted_units, si_unit, to_si
 
-PLAIN_KEYS = ("preset", "withhold", "filter_order")
+PLAIN_KEYS = ("preset", "withhold", "filter_order", "filter_kind")
+FILTER_KEYS = ("filter_order", "filter_kind")  # plain keys a sensor change may set
 ACCEPTED_KEYS = PLAIN_KEYS + tuple(PARAMETERS)
 
 
@@ -92,11 +94,12 @@ def sensor_from_table(table: dict, where: str = "[sensor]") -> SensorSpec:
         raise ScenarioError(f"{where} withhold: expected true or false, got {withhold!r}")
     base = get_preset(preset)
     filter_order = _filter_order(table.get("filter_order", base.filter_order), where)
+    filter_kind = _filter_kind(table.get("filter_kind", base.filter_kind), where)
     overrides = {key: _parse_quantity(key, raw, where) for key, raw in table.items() if key in PARAMETERS}
     try:
         return base.replace(
             name=preset if not overrides else f"{preset} (customised: {', '.join(overrides)})",
-            filter_order=filter_order, withheld=withhold, **overrides,
+            filter_order=filter_order, filter_kind=filter_kind, withheld=withhold, **overrides,
         )
     except ScenarioError as exc:
         raise ScenarioError(f"{where} {exc}") from None
@@ -109,18 +112,27 @@ def _filter_order(value, where: str) -> int:
     return value
 
 
+def _filter_kind(value, where: str) -> str:
+    """The ``filter_kind`` key, checked (one of :data:`gaitsim.imu.model.FILTER_KINDS`)."""
+    if value not in FILTER_KINDS:
+        raise ScenarioError(f"{where} filter_kind: expected one of {list(FILTER_KINDS)}, got {value!r}")
+    return value
+
+
 def changed_sensor(spec: SensorSpec | None, table: dict, where: str = "[sensor]") -> SensorSpec:
     """``spec`` (None: the ideal sensor) with the quantities of a ``[sensor]``-style table (``[value, "unit"]``
-    entries, converted to SI) and its ``filter_order`` replaced; the other keys of a [sensor] table (preset,
-    withhold) cannot change an existing sensor."""
+    entries, converted to SI) and its ``filter_order`` / ``filter_kind`` replaced; the other keys of a [sensor]
+    table (preset, withhold) cannot change an existing sensor."""
     spec = get_preset("ideal") if spec is None else spec
-    refused = [key for key in table if key not in PARAMETERS and key != "filter_order"]
+    refused = [key for key in table if key not in PARAMETERS and key not in FILTER_KEYS]
     if refused:
         raise ScenarioError(f"{where}: key(s) {refused} cannot change a sensor; accepted keys: "
-                            f"{list(PARAMETERS) + ['filter_order']}")
-    changes = {key: _parse_quantity(key, raw, where) for key, raw in table.items() if key != "filter_order"}
+                            f"{list(PARAMETERS) + list(FILTER_KEYS)}")
+    changes = {key: _parse_quantity(key, raw, where) for key, raw in table.items() if key not in FILTER_KEYS}
     if "filter_order" in table:
         changes["filter_order"] = _filter_order(table["filter_order"], where)
+    if "filter_kind" in table:
+        changes["filter_kind"] = _filter_kind(table["filter_kind"], where)
     try:
         return spec.replace(**changes)
     except ScenarioError as exc:
@@ -128,10 +140,13 @@ def changed_sensor(spec: SensorSpec | None, table: dict, where: str = "[sensor]"
 
 
 def sensor_table(spec: SensorSpec) -> dict:
-    """A ``[sensor]`` table that rebuilds ``spec``: the ideal preset, its filter order, whether it is withheld, and
-    every parameter that differs from the ideal sensor's, in SI with the unit's name."""
+    """A ``[sensor]`` table that rebuilds ``spec``: the ideal preset, its filter order (and kind, when not the
+    ideal sensor's), whether it is withheld, and every parameter that differs from the ideal sensor's, in SI with
+    the unit's name."""
     ideal = get_preset("ideal")
     table = {"preset": "ideal", "filter_order": spec.filter_order, "withhold": spec.withheld}
+    if spec.filter_kind != ideal.filter_kind:
+        table["filter_kind"] = spec.filter_kind
     for key, (kind, _shape, _default) in PARAMETERS.items():
         if not np.array_equal(spec[key], ideal[key]):
             table[key] = [spec[key].tolist(), si_unit(kind)]

@@ -32,9 +32,13 @@ default value):
    dominates by orders of magnitude.
    **White noise**: sample std ``N sqrt(fs)`` (noise density N), from float32 standard normals (numpy's,
    drawn in a compiled loop: :mod:`gaitsim.imu.normals`).
-6. **Bandwidth**: a Butterworth low-pass of order ``filter_order`` and cutoff ``*_bandwidth`` (digital,
-   bilinear, at the output rate) acting on the sum above, started in steady state on the first sample so a
-   static start has no transient.
+6. **Bandwidth**: a Butterworth low-pass of order ``filter_order`` and cutoff ``*_bandwidth`` acting on the sum
+   above, started in steady state on the first sample so a static start has no transient. ``filter_kind``
+   says where it sits: ``"digital"``, the sensor's digital filter at the output rate (bilinear transform,
+   exact -3 dB at the cutoff, a zero at the Nyquist frequency), or ``"analogue"``, a front end ahead of the
+   sampling (the analogue filter's poles mapped by z = exp(s / fs), no zeros but at z = 0, unit gain at DC:
+   for order 1 the RC recursion ``y[k] = y[k-1] + (1 - exp(-2 pi f_c / fs)) (x[k] - y[k-1])``; the aliasing of
+   its stop band is not modelled).
 7. **Quantisation** to multiples of ``*_resolution``, then **saturation** (clip) at ``+-*_range``.
 
 Random draws: the run's Generator spawns one child per stream in :data:`RANDOM_STREAMS` (always all of
@@ -45,6 +49,7 @@ the realisation of the others, and a seeded run is reproducible.
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -56,6 +61,8 @@ from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
 from gaitsim.imu.units import si_unit
 from nav import quaternion
 from nav.calibration import Calibration
+
+FILTER_KINDS = ("digital", "analogue")  # where the bandwidth low-pass sits (module docstring, step 6)
 
 # parameter name -> (unit kind, shape, default). "axes" values are per-axis (3,) vectors, "matrix" (3, 3).
 PARAMETERS: dict[str, tuple[str, str, object]] = {
@@ -135,6 +142,7 @@ class SensorSpec:
     source : where the figures come from (datasheet, paper).
     parameters : mapping parameter name -> read-only array (SI); names missing take their defaults.
     filter_order : Butterworth order of the bandwidth low-pass (1..8).
+    filter_kind : where that low-pass sits: ``"digital"`` or ``"analogue"`` (module docstring, step 6).
     withheld : True when the recording metadata must not declare the parameters (blind tests).
     """
 
@@ -143,6 +151,7 @@ class SensorSpec:
     parameters: dict = field(default_factory=dict)
     filter_order: int = 2
     withheld: bool = False
+    filter_kind: str = "digital"
 
     def __post_init__(self):
         unknown = set(self.parameters) - set(PARAMETERS)
@@ -153,6 +162,8 @@ class SensorSpec:
         object.__setattr__(self, "parameters", _ReadOnlyDict(complete))
         if not (isinstance(self.filter_order, int) and 1 <= self.filter_order <= 8):
             raise ScenarioError(f"filter_order: value {self.filter_order!r} must be an integer in 1..8")
+        if self.filter_kind not in FILTER_KINDS:
+            raise ScenarioError(f"filter_kind: value {self.filter_kind!r} must be one of {list(FILTER_KINDS)}")
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.parameters[name]
@@ -160,12 +171,14 @@ class SensorSpec:
     def __reduce__(self):
         """Pickled (e.g. for a worker process) as its constructor's arguments, so it comes back validated and
         read-only."""
-        return SensorSpec, (self.name, self.source, dict(self.parameters), self.filter_order, self.withheld)
+        return SensorSpec, (self.name, self.source, dict(self.parameters), self.filter_order, self.withheld,
+                            self.filter_kind)
 
     def replace(self, **changes) -> "SensorSpec":
-        """A new spec with some parameters (SI) or the fields name/source/filter_order/withheld changed;
-        this spec is left as it is."""
-        top = {k: changes.pop(k) for k in ("name", "source", "filter_order", "withheld") if k in changes}
+        """A new spec with some parameters (SI) or the fields name/source/filter_order/filter_kind/withheld
+        changed; this spec is left as it is."""
+        top = {k: changes.pop(k) for k in ("name", "source", "filter_order", "filter_kind", "withheld")
+               if k in changes}
         return dataclasses.replace(self, parameters={**self.parameters, **changes}, **top)
 
     def deterministic(self, turn_on_accel=None, turn_on_gyro=None) -> Calibration:
@@ -190,7 +203,7 @@ class SensorSpec:
             listed = np.where(np.isinf(value), np.nan, value).tolist()
             parameters[name] = {"value": _inf_to_text(listed, value), "unit": si_unit(kind)}
         return {"withheld": False, "name": self.name, "source": self.source, "filter_order": self.filter_order,
-                "parameters": parameters}
+                "filter_kind": self.filter_kind, "parameters": parameters}
 
 
 def _inf_to_text(listed, value: np.ndarray):
@@ -320,16 +333,22 @@ def random_walk_nodes(n: int, dt: float, walk: np.ndarray, rng: np.random.Genera
 _NO_NODES = (np.zeros((0, 3)), 1)  # a slow process that is off
 
 
-def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
-    """Butterworth low-pass along axis 0, started in steady state on the first sample (no start transient).
+def low_pass(x: np.ndarray, cutoff_hz: float, rate_hz: float, order: int, kind: str = "digital") -> np.ndarray:
+    """Butterworth low-pass along axis 0, digital or analogue (module docstring, step 6), started in steady
+    state on the first sample (no start transient).
 
     Raises ScenarioError when the cutoff is not below the Nyquist frequency.
     """
     if cutoff_hz >= 0.5 * rate_hz:
         raise ScenarioError(f"bandwidth {cutoff_hz} Hz must be below half the sample rate ({0.5 * rate_hz} Hz)")
-    from scipy.signal import butter, sosfilt, sosfilt_zi
+    from scipy.signal import butter, sosfilt, sosfilt_zi, zpk2sos
 
-    sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    if kind == "digital":
+        sos = butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    else:
+        _, s_poles, _ = butter(order, 2.0 * math.pi * cutoff_hz, analog=True, output="zpk")
+        poles = np.exp(s_poles / rate_hz)
+        sos = zpk2sos(np.zeros(order), poles, float(np.real(np.prod(1.0 - poles))))
     zi = sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
     return sosfilt(sos, x, axis=0, zi=zi)[0]
 
@@ -462,7 +481,7 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
             implementation.add_stochastic_terms(out, signal, instability, walk, white_std, streams[f"{s}_white"],
                                                 resolution_now, limit_now)
         if filtered:
-            out = low_pass(out, bandwidth, rate_hz, spec.filter_order)
+            out = low_pass(out, bandwidth, rate_hz, spec.filter_order, spec.filter_kind)
             implementation.quantise_and_clip(out, resolution, limit)
         measured.append(out)
     acc_m, gyr_m = measured

@@ -28,16 +28,26 @@
 5. of the candidates, the one that leaves the smallest misfit over all signature residuals
    (:func:`gaitsim.loop.residuals.signature_misfit`) is added to the twin when it lowers that misfit and its
    own Q, explains at least ``settings.EXPLAINED_FRACTION`` of the acted residual or brings it to the noise
-   level, lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
+   level by moving it toward zero by at least its uncertainty (a residual just above the noise level that an
+   effect nudges below it, or that reads at the noise level only because the twin's spread grew, is not
+   explained), lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
    bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
    recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
    at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
-   Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record).
-   Steps 4-5 repeat for at most ``settings.MAX_ROUNDS`` residuals. A significant residual that no effect of the
-   library moves (``rest_gyro_change``: a drifting bias) is reported unexplained before the rounds, without
-   using one (:func:`unmovable`).
+   Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record). The other
+   acceptable candidates whose misfit lies within ``settings.NOISE_LEVEL ** 2`` of the named one's (less than
+   one residual at the noise level adds) are reported with it as ``"equivalent"``: the recording does not tell
+   them apart (e.g. the low-pass forms, which differ most above a fifth of the sample rate, where the
+   comparison's noise is largest), and the named magnitude holds for the named form only.
+   Steps 4-5 repeat, each significant residual acted on once, until none is left or
+   ``settings.MAX_EFFECTS`` effects have been added. A residual left unexplained does not count against that
+   budget: it says what the twin cannot reproduce, and must not keep a smaller residual that an effect of the
+   library does explain from being acted on (a candidate's fit to the current twin is kept, so acting on
+   another residual re-fits only effects not tried on that twin yet). A significant residual that no effect of
+   the library moves (``rest_gyro_change``: a drifting bias) is reported unexplained before the rounds
+   (:func:`unmovable`).
 
 The predicted-versus-measured navigation discrepancy is ``|twin - recording|`` of each navigation metric,
 reported for the twin before any effect and after all accepted ones.
@@ -215,7 +225,7 @@ class Fit:
     harmed: tuple = ()
     total_before: float = math.nan
     total_after: float = math.nan
-    acted_at_noise_level: bool = False
+    closes_acted: bool = False  # brings the acted residual to the noise level, moved by >= its uncertainty
     at_bound: bool = False
 
     def summary(self) -> dict:
@@ -232,7 +242,8 @@ class Fit:
 
     @property
     def acceptable(self) -> bool:
-        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.acted_at_noise_level)
+        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION
+                                       or self.closes_acted)
                 and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed
                 and not self.at_bound)
 
@@ -307,9 +318,18 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
     harmed = tuple(n for n in res if n != acted and n in base
                    and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed,
-                               acted_at_noise_level=bool(acted in res and res[acted].at_noise_level),
+                               closes_acted=bool(acted in res and res[acted].at_noise_level
+                                                 and before - after >= base[acted].uncertainty),
                                total_before=residuals.signature_misfit(base),
                                total_after=residuals.signature_misfit(res))
+
+
+def equivalent(best: Fit, fits: list) -> list:
+    """The acceptable fits other than ``best`` whose signature misfit after lies within
+    ``settings.NOISE_LEVEL ** 2`` of ``best``'s, smallest misfit first (module docstring, step 5)."""
+    margin = best.total_after + settings.NOISE_LEVEL ** 2
+    return sorted((f for f in fits if f is not best and f.acceptable and f.total_after <= margin),
+                  key=lambda f: f.total_after)
 
 
 def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:
@@ -328,6 +348,7 @@ def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list)
         "fraction_explained": best.fraction if (best is not None and accepted) else
         (max(0.0, best.fraction) if best is not None else 0.0),
         "best_candidate": best.summary() if best is not None else None,
+        "equivalent": [c.summary() for c in equivalent(best, candidates)] if accepted else [],
         "candidates": [c.summary() for c in candidates],
     }
 
@@ -404,7 +425,7 @@ def _in_worker(task, *args):
     return task(_WORKER_SIMULATOR, *args)
 
 
-def run_loop(rec: Recording, max_rounds: int = settings.MAX_ROUNDS, log=lambda message: None,
+def run_loop(rec: Recording, max_effects: int = settings.MAX_EFFECTS, log=lambda message: None,
              axis_map: str | None = None, distance_m: float | None = None, workers: int = 1) -> LoopResult:
     """The whole loop on one recording (module docstring). ``log`` receives progress lines; ``axis_map`` is the
     ``--axes`` map and ``distance_m`` the ``--distance`` of the command line. ``workers`` processes run the
@@ -417,10 +438,10 @@ def run_loop(rec: Recording, max_rounds: int = settings.MAX_ROUNDS, log=lambda m
         for a recording the loop cannot use (:func:`prepare`; too few regular strides).
     """
     with Workers.started(workers) as pool:
-        return _run_loop(rec, max_rounds, Progress(log), axis_map, distance_m, pool)
+        return _run_loop(rec, max_effects, Progress(log), axis_map, distance_m, pool)
 
 
-def _run_loop(rec: Recording, max_rounds: int, progress: Progress, axis_map: str | None, distance_m: float | None,
+def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: str | None, distance_m: float | None,
               workers: Workers) -> LoopResult:
     rec, frame, ref = prepare(rec, axis_map, distance_m)
     simulate = workers.simulate
@@ -441,7 +462,9 @@ def _run_loop(rec: Recording, max_rounds: int, progress: Progress, axis_map: str
         acted_names.add(acted.name)
         attributions.append(_record(acted, None, False, []))
         progress.note(f"{acted.name} (z = {acted.z:.1f}): moved by no effect of the library, unexplained")
-    for round_number in range(1, max_rounds + 1):
+    round_number = 0
+    while len(used) < max_effects:
+        round_number += 1
         ranked = sorted((r for r in current.values() if r.name not in acted_names
                          and r.name not in settings.DERIVED and r.z > settings.NOISE_LEVEL),
                         key=lambda r: (r.name.startswith("nav_"), -r.z))

@@ -40,8 +40,9 @@ def add_parser(subparsers) -> None:
                               description=__doc__)
     p.add_argument("dataset", help=f"one of {', '.join(CHOICES)}, or a recording folder")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--rounds", type=int, default=settings.MAX_ROUNDS,
-                   help=f"largest number of residuals acted on per recording (default {settings.MAX_ROUNDS})")
+    p.add_argument("--max-effects", type=int, default=settings.MAX_EFFECTS,
+                   help="largest number of effects added to a recording's twin; every significant residual is "
+                        f"acted on until then, 0 reports the residuals alone (default {settings.MAX_EFFECTS})")
     p.add_argument("--data", default=None, help="folder holding the shared datasets (default: $GAITSIM_DATA or "
                                                 "../shared/data)")
     p.add_argument("--axes", default=None, help="sensor axes as body x,y,z, e.g. 'y,-x,z' (default: as recorded)")
@@ -97,7 +98,7 @@ def _run_recordings(dataset: str, folder: Path, args, workers: int) -> tuple[lis
         sub = folder / label
         sub.mkdir(parents=True)
         try:
-            result = attribution.run_loop(read(), max_rounds=args.rounds, axis_map=args.axes, distance_m=args.distance,
+            result = attribution.run_loop(read(), max_effects=args.max_effects, axis_map=args.axes, distance_m=args.distance,
                                           log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True),
                                           workers=workers)
             doc = report.write_result(result, sub, f"{dataset} / {label}")
@@ -121,6 +122,9 @@ def _run_held_out(dataset: str, folder: Path, results: dict) -> list[str]:
     return transfer.markdown_rows(dataset, rows)
 
 
+FOUND_AS = {"named": "yes", "unexplained": "yes", "equivalent": "as good as the effect named", None: "no"}
+
+
 def _run_blind(folder: Path) -> list[str]:
     """The blind table (:mod:`gaitsim.loop.blind`) of every simulated sensor and measured recording into
     ``folder``/blind.md and blind.json."""
@@ -133,23 +137,28 @@ def _run_blind(folder: Path) -> list[str]:
             row = {"sensor": source, "untouched_named": blind.named_effects(untouched),
                    **blind.verdict(case, blind.run(source, case), untouched)}
             rows.append(row)
-            found.append(row["found"])
-            print(f"blind {source} {case.name}: found = {row['found']} {row['named_beyond_untouched']}", flush=True)
+            found.append(row["found_as"])
+            print(f"blind {source} {case.name}: found = {row['found_as']} {row['named_beyond_untouched']}", flush=True)
         inside = [f for f, c in zip(found, blind.cases(source)) if c.named != ("unexplained",)]
         outside = [f for f, c in zip(found, blind.cases(source)) if c.named == ("unexplained",)]
-        summary.append(f"{source}: {sum(inside)} of {len(inside)} library effects named within "
+        summary.append(f"{source}: {inside.count('named')} of {len(inside)} library effects named within "
                        f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}" +
-                       (f"; outside effect unexplained: {outside[0]}" if outside else ""))
+                       (f", {inside.count('equivalent')} more fit as well as the effect named"
+                        if "equivalent" in inside else "") +
+                       (f"; outside effect unexplained: {outside[0] is not None}" if outside else ""))
     write_json(folder / "blind.json", rows)
     lines = ["# Blind tests", "", blind.__doc__.strip(), ""] + [f"- {line}" for line in summary] + [
         "", "| recording | case | injected | expected | named beyond the untouched recording | found |",
         "|---|---|---|---|---|---|"]
     for r in rows:
         named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
+        if r["equivalent_beyond_untouched"]:
+            named += " (as good: " + ", ".join(
+                f"{k} {shown(v)}" for k, v in r["equivalent_beyond_untouched"].items()) + ")"
         if r["unexplained_beyond_untouched"]:
             named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
         lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
-                     f"{shown(r['expected_magnitude'])} | {named} | {'yes' if r['found'] else 'no'} |")
+                     f"{shown(r['expected_magnitude'])} | {named} | {FOUND_AS[r['found_as']]} |")
     untouched_named = {r["sensor"]: r["untouched_named"] for r in rows}
     lines += ["", "Named on the untouched recordings (subtracted): " + "; ".join(
         f"{s}: {named}" for s, named in untouched_named.items())]
@@ -169,8 +178,8 @@ def _run_target(target: str, folder: Path, args, workers: int = 1) -> tuple[list
 
 def run(args) -> int:
     """Run the loop as the command line asked; returns the exit code (1 when any recording failed)."""
-    if args.rounds < 1:
-        raise ValueError(f"--rounds {args.rounds}: must be >= 1")
+    if args.max_effects < 0:
+        raise ValueError(f"--max-effects {args.max_effects}: must be >= 0")
     if args.jobs < 1:
         raise ValueError(f"--jobs {args.jobs}: must be >= 1")
     if args.axes is not None:

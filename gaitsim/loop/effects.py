@@ -16,6 +16,7 @@ re-run the sensor model on the cached walk).
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | mount_yaw | [sensor] mounting_misalignment (yaw) | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
+| bandwidth_analogue | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1, filter_kind = "analogue" | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
 | accel_scale_x, _y, _z | [sensor] accel_misalignment, one row x (1 + s) | % | stride closure, rest_acc_norm, acc profiles, navigation |
 | accel_bias_x, _y, _z | [sensor] accel_bias, one component + b (mount tilt kept on the rest reading) | m/s^2 | stride closure, rest_acc_norm, acc profiles, navigation |
@@ -208,13 +209,14 @@ LIBRARY: tuple[Effect, ...] = (
            ("onset_hf", "hf40", "hf80", "acc_peak", "stance_acc_spread", "stance_duration"),
            (0.0, 300.0),
            lambda m, ctx: {"impact": {"ringing_hz": ctx["ringing_hz"], "ringing_accel_mps2": m}}),
-    *(Effect(name, f"low-pass of the sensor (Butterworth of order {order}, same cutoff on both sensors)",
-             "[sensor] accel_bandwidth, gyro_bandwidth, filter_order", "Hz",
+    *(Effect(name, f"low-pass of the sensor ({kind} Butterworth of order {order}, same cutoff on both sensors)",
+             "[sensor] accel_bandwidth, gyro_bandwidth, filter_order, filter_kind", "Hz",
              ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag", "stance_acc_spread",
               "stance_duration") + ACC_PROFILES + GYR_PROFILES + CLOSURE, (8.0, 400.0),
-             lambda m, ctx, order=order: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"],
-                                                 filter_order=order), log_scale=True)
-      for name, order in (("bandwidth", 2), ("bandwidth_first_order", 1))),
+             lambda m, ctx, order=order, kind=kind: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"],
+                                                            filter_order=order, filter_kind=kind), log_scale=True)
+      for name, order, kind in (("bandwidth", 2, "digital"), ("bandwidth_first_order", 1, "digital"),
+                                ("bandwidth_analogue", 1, "analogue"))),
     Effect("accel_gyro_skew", "time skew between accelerometer and gyro sampling (> 0: gyro later)",
            "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES + CLOSURE, (-20.0, 20.0),
            lambda m, ctx: _sensor(accel_gyro_skew=[m, "ms"]),

@@ -2,7 +2,7 @@
 
 ``attribution.json`` holds, per residual acted on, the effect named (or ``"unexplained"``), the scenario key,
 the fitted magnitude and unit, the residual before and after with uncertainties, whether it is at the noise
-level after, the fraction explained and every candidate tried; then the predicted-versus-measured navigation
+level after, the fraction explained, the candidates that fit as well (``equivalent``) and every candidate tried; then the predicted-versus-measured navigation
 metrics before and after, all residuals before and after, and the fitted twin (its scenario document, which a
 user can save as TOML and simulate). ``twin.toml`` is the twin after all accepted effects as a scenario file
 (``gaitsim generate twin.toml --out DIR`` simulates it).
@@ -118,6 +118,9 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
         best = a.get("best_candidate") or {}
         effect = a["effect"] if a["effect"] != "unexplained" else (
             f"unexplained (best: {best.get('effect', '-')}, {best.get('fraction_explained', 0):.0%})")
+        if a.get("equivalent"):
+            alternatives = ", ".join(f"{e['effect']} {shown(e['magnitude'])} {e['unit']}" for e in a["equivalent"])
+            effect += f" (as good: {alternatives})"
         lines.append(f"| {a['residual']} ({a['unit']}) | {shown(a['z_before'], '.3g')} | {effect} | {mag} | "
                      f"{shown(a['residual_before'])} | {shown(a['residual_after'])} | {shown(a['uncertainty_after'])} | "
                      f"{a['fraction_explained']:.0%} |")
