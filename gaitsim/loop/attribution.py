@@ -242,8 +242,7 @@ class Fit:
 
     @property
     def acceptable(self) -> bool:
-        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION
-                                       or self.closes_acted)
+        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.closes_acted)
                 and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed
                 and not self.at_bound)
 
@@ -309,9 +308,10 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
 
 
 def judged(fit: Fit, base: dict, acted: str) -> Fit:
-    """``fit`` with the fraction of ``acted`` it explains and the other residuals it makes worse: at the noise
-    level before, beyond ``settings.HARM_FACTOR`` times it after (a residual that was already off may move
-    either way while another effect remains to be found)."""
+    """``fit`` with the fraction of ``acted`` it explains, whether it closes ``acted`` (to the noise level, moved
+    toward zero by at least its uncertainty) and the other residuals it makes worse: at the noise level before,
+    beyond ``settings.HARM_FACTOR`` times it after (a residual that was already off may move either way while
+    another effect remains to be found)."""
     res = fit.residuals
     before, after = abs(base[acted].value), abs(res[acted].value) if acted in res else math.inf
     fraction = 1.0 - after / before if before > 0 else 0.0
