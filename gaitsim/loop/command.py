@@ -98,9 +98,9 @@ def _run_recordings(dataset: str, folder: Path, args, workers: int) -> tuple[lis
         sub = folder / label
         sub.mkdir(parents=True)
         try:
-            result = attribution.run_loop(read(), max_effects=args.max_effects, axis_map=args.axes, distance_m=args.distance,
-                                          log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True),
-                                          workers=workers)
+            result = attribution.run_loop(read(), max_effects=args.max_effects, axis_map=args.axes,
+                                          distance_m=args.distance, workers=workers,
+                                          log=lambda m, lab=label: print(f"  [{dataset}/{lab}] {m}", flush=True))
             doc = report.write_result(result, sub, f"{dataset} / {label}")
         except Exception as exc:  # noqa: BLE001 -- any failure of one recording is reported, the others go on
             (sub / "report.md").write_text(_failure_report(f"{dataset} / {label}", exc))
@@ -132,15 +132,13 @@ def _run_blind(folder: Path) -> list[str]:
     for source in blind.SENSORS + blind.MEASURED:
         untouched = blind.run(source, None)
         print(f"blind {source} untouched: {blind.named_effects(untouched)}", flush=True)
-        found = []
+        inside, outside = [], []  # found_as of the library cases, of the case outside the library
         for case in blind.cases(source):
             row = {"sensor": source, "untouched_named": blind.named_effects(untouched),
                    **blind.verdict(case, blind.run(source, case), untouched)}
             rows.append(row)
-            found.append(row["found_as"])
+            (outside if case.named == ("unexplained",) else inside).append(row["found_as"])
             print(f"blind {source} {case.name}: found = {row['found_as']} {row['named_beyond_untouched']}", flush=True)
-        inside = [f for f, c in zip(found, blind.cases(source)) if c.named != ("unexplained",)]
-        outside = [f for f, c in zip(found, blind.cases(source)) if c.named == ("unexplained",)]
         summary.append(f"{source}: {inside.count('named')} of {len(inside)} library effects named within "
                        f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}" +
                        (f", {inside.count('equivalent')} more fit as well as the effect named"

@@ -2,8 +2,8 @@
 
 ``attribution.json`` holds, per residual acted on, the effect named (or ``"unexplained"``), the scenario key,
 the fitted magnitude and unit, the residual before and after with uncertainties, whether it is at the noise
-level after, the fraction explained, the candidates that fit as well (``equivalent``) and every candidate tried; then the predicted-versus-measured navigation
-metrics before and after, all residuals before and after, and the fitted twin (its scenario document, which a
+level after, the fraction explained, the candidates that fit as well (``equivalent``) and every candidate tried;
+then the predicted-versus-measured navigation metrics before and after, all residuals before and after, and the fitted twin (its scenario document, which a
 user can save as TOML and simulate). ``twin.toml`` is the twin after all accepted effects as a scenario file
 (``gaitsim generate twin.toml --out DIR`` simulates it).
 """

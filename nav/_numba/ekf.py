@@ -132,8 +132,8 @@ def filter_run(mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
     Outputs (filled in place; rows before i0 NaN): quat (N,4), vel (N,3), pos (N,3), bias_acc (N,3),
     bias_gyr (N,3), gsens (N,9), p_diag (N,n) -- a posteriori at each sample, or smoothed when ``rts`` (state
     only; p_diag stays filtered). The estimates bias_acc, bias_gyr, gsens and p_diag may instead have one row:
-    it receives every sample in turn and holds the last one's (not with ``rts``, which reads them back). Returns the number of measurement updates skipped because the innovation
-    covariance was not positive definite.
+    it receives every sample in turn and holds the last one's (not with ``rts``, which reads them back). Returns
+    the number of measurement updates skipped because the innovation covariance was not positive definite.
 
     The state count is a constant in each branch: the compiler unrolls and vectorises the block loops for it.
     """
