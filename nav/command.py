@@ -14,6 +14,7 @@ from tqdm import tqdm
 
 from . import metrics
 from .adaptive_detector import AdaptiveThreshold
+from .calm_anchor import CalmAnchor
 from .calibration import TERM_GROUPS
 from .checks import ALLOWABLE
 from .constants import DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
@@ -26,6 +27,8 @@ from .solution import write_solution_into
 
 _DEFAULT_FILTER = FilterConfig()
 _DEFAULT_ADAPTIVE = AdaptiveThreshold()
+_DEFAULT_ANCHOR = CalmAnchor()
+_DEFAULT_DETECTOR = NavOptions().detector
 
 
 def add_parser(subparsers) -> None:
@@ -35,13 +38,24 @@ def add_parser(subparsers) -> None:
     p.add_argument("recording", help="recording folder (imu.csv, ...) or a folder of run-NNN recordings")
     p.add_argument("--out", required=True, help="output folder for solution.csv and score.json")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
-    p.add_argument("--detector", choices=DETECTORS, default="shoe", help="zero-velocity detector (default shoe)")
+    p.add_argument("--detector", choices=DETECTORS, default=_DEFAULT_DETECTOR,
+                   help=f"zero-velocity detector (default {_DEFAULT_DETECTOR}: SHOE plus each stride's calmest "
+                        "stretch where the fixed threshold finds none)")
     p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD, help="detector threshold (default 3e4)")
     p.add_argument("--sigma-a", type=float, default=DEFAULT_SIGMA_A,
                    help="detector accelerometer sigma, m/s^2 (default 0.01)")
     p.add_argument("--sigma-g-dps", type=float, default=math.degrees(DEFAULT_SIGMA_G),
                    help="detector gyro sigma, deg/s (default 0.1; converted to rad/s)")
     p.add_argument("--window", type=int, default=DEFAULT_WINDOW, help="detector window, samples (default 3)")
+    p.add_argument("--anchor-span", type=float, default=_DEFAULT_ANCHOR.half_span_s,
+                   help="anchored detector: a stride's calmest window is the calmest within +- this, s "
+                        f"(default {_DEFAULT_ANCHOR.half_span_s:g})")
+    p.add_argument("--anchor-widen", type=float, default=_DEFAULT_ANCHOR.widen,
+                   help="anchored detector: windows within this factor of the calmest one's statistic are taken, "
+                        f"dimensionless (default {_DEFAULT_ANCHOR.widen:g})")
+    p.add_argument("--anchor-cap", type=float, default=_DEFAULT_ANCHOR.cap,
+                   help="anchored detector: a calmest window at or above this factor of --threshold is motion, "
+                        f"not stance, dimensionless (default {_DEFAULT_ANCHOR.cap:g})")
     p.add_argument("--adaptive-ratio", type=float, default=_DEFAULT_ADAPTIVE.ratio,
                    help="adaptive detector: threshold = max(--threshold, ratio x the span's peak gyro energy in "
                         f"sigma_g^2), dimensionless (default {_DEFAULT_ADAPTIVE.ratio:g}; 0: fixed threshold)")
@@ -83,7 +97,8 @@ def options_from_args(args) -> NavOptions:
     terms = tuple(x.strip() for x in args.calibration_terms.split(",") if x.strip())
     return NavOptions(
         detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g_dps),
-        window=args.window, adaptive=AdaptiveThreshold(args.adaptive_ratio, args.adaptive_span, args.adaptive_window),
+        window=args.window, anchor=CalmAnchor(args.anchor_span, args.anchor_widen, args.anchor_cap),
+        adaptive=AdaptiveThreshold(args.adaptive_ratio, args.adaptive_span, args.adaptive_window),
         filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,
         heading=None if args.heading_deg is None else math.radians(args.heading_deg), gravity=args.gravity,

@@ -30,7 +30,7 @@ import numpy as np
 from .constants import DEFAULT_GRAVITY, DEFAULT_SIGMA_A, DEFAULT_SIGMA_G, DEFAULT_THRESHOLD, DEFAULT_WINDOW
 
 STATISTICS = ("shoe", "are", "mv", "mag")
-DETECTORS = STATISTICS + ("adaptive", "oracle")
+DETECTORS = STATISTICS + ("anchored", "adaptive", "oracle")
 SLIDING = "sliding window, step 1; all W samples of a window below the threshold are stationary (OpenShoe)"
 BLOCKS = "non-overlapping blocks of W samples; a block below the threshold is stationary (pyshoe)"
 WHOLE_RECORDING_GRAVITY = (
@@ -53,8 +53,9 @@ class DetectorParams:
     fs : Hz, sample rate the window length refers to (median rate for irregular timestamps).
     gravity : m/s^2, gravity magnitude used by SHOE and MAG.
     semantics : how windows are laid out and marked.
-    adaptation : for the adaptive SHOE (nav.adaptive_detector), how its threshold follows the gait (threshold is
-        then the floor gamma_0); None for a fixed threshold.
+    adaptation : how the threshold follows the gait, for the anchored SHOE (nav.calm_anchor) and the adaptive SHOE
+        (nav.adaptive_detector), whose ``threshold`` is then the fixed gamma_0 or the floor; None for a fixed
+        threshold.
     """
 
     name: str

@@ -21,6 +21,7 @@ import numpy as np
 from . import detectors, metrics
 from . import quaternion as quat
 from .adaptive_detector import AdaptiveThreshold, detect_adaptive
+from .calm_anchor import CalmAnchor, detect_anchored
 from .alignment import DEFAULT_MIN_SAMPLES, align, first_leg_direction, yaw_of
 from .calibration import TERM_GROUPS, load_calibration
 from .checks import ALLOWABLE, CheckReport, check_recording, check_stance_found
@@ -50,11 +51,13 @@ class NavOptions:
 
     Attributes
     ----------
-    detector : "shoe", "are", "mv", "mag", "adaptive" (SHOE with a threshold that follows the gait,
-        nav.adaptive_detector) or "oracle" (the recording's true stance labels).
+    detector : "anchored" (the default: OpenShoe's SHOE that also takes each stride's calmest stretch where the
+        fixed threshold finds nothing, nav.calm_anchor), "shoe", "are", "mv", "mag", "adaptive" (SHOE with a
+        threshold that follows the gait, nav.adaptive_detector) or "oracle" (the recording's true stance labels).
     threshold : detector threshold gamma (dimensionless); the floor gamma_0 for "adaptive". Default 3e4 (OpenShoe).
     sigma_a : m/s^2, sigma_g : rad/s, window : samples -- detector parameters (OpenShoe: 0.01, 0.1 deg/s, 3);
         "adaptive" takes its window from ``adaptive.window_s`` instead.
+    anchor : CalmAnchor, span (s), widening and cap of the "anchored" detector.
     adaptive : AdaptiveThreshold, ratio, span (s) and window (s) of the "adaptive" detector.
     filter : FilterConfig (states, noise densities, ZUPT noise, ...).
     method : "auto" (exact increments when the recording's IMU is its exact truth and no calibration is
@@ -71,11 +74,12 @@ class NavOptions:
         warning; default none.
     """
 
-    detector: str = "shoe"
+    detector: str = "anchored"
     threshold: float = DEFAULT_THRESHOLD
     sigma_a: float = DEFAULT_SIGMA_A
     sigma_g: float = DEFAULT_SIGMA_G
     window: int = DEFAULT_WINDOW
+    anchor: CalmAnchor = field(default_factory=CalmAnchor)
     adaptive: AdaptiveThreshold = field(default_factory=AdaptiveThreshold)
     filter: FilterConfig = field(default_factory=FilterConfig)
     method: str = "auto"
@@ -153,6 +157,9 @@ def _detect(rec: Recording, acc: np.ndarray, gyr: np.ndarray, options: NavOption
             raise RecordingError(f"detector 'oracle' needs the truth on the IMU's samples; truth.csv has "
                                  f"{len(rec.truth.t)} rows, imu.csv {len(rec.t)}")
         return detectors.oracle(rec.t, rec.truth.stance)
+    if options.detector == "anchored":
+        return detect_anchored(rec.t, acc, gyr, options.threshold, options.sigma_a, options.sigma_g, options.window,
+                               options.anchor, gravity)
     if options.detector == "adaptive":
         return detect_adaptive(rec.t, acc, gyr, options.threshold, options.sigma_a, options.sigma_g, options.adaptive,
                                gravity)

@@ -38,3 +38,22 @@ def test_ucr_track_rmse_against_reference():
     s = _scores("ucr-fgo")
     for side in ("left", "right"):
         assert s[side]["ate_m"] < 0.4
+
+
+def test_the_default_detector_is_the_fixed_shoe_on_the_shared_walks():
+    # the anchored SHOE adds a stride's calmest stretch only where the fixed threshold finds no stance within
+    # +-0.5 s; on these walking recordings it finds every one, so nav's default decides exactly as OpenShoe's SHOE
+    from gaitsim.measured import load_dataset
+    from nav import detectors
+    from nav.calm_anchor import detect_anchored
+
+    options = NavOptions()
+    assert options.detector == "anchored"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name in ("gaitmap-healthy", "ucr-fgo", "xio-ngimu"):
+            for rec in load_dataset(name, DATA):
+                args = (rec.t, rec.acc, rec.gyr, options.threshold, options.sigma_a, options.sigma_g, options.window)
+                fixed = detectors.detect("shoe", *args, gravity=rec.gravity)
+                anchored = detect_anchored(*args, options.anchor, rec.gravity)
+                assert (anchored.stationary == fixed.stationary).all(), rec.meta["recording"]
