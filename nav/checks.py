@@ -8,11 +8,13 @@ samples, repeated or decreasing timestamps, and -- unless the caller allows them
 read the recording with ``time_unit``, ``gaitsim nav --time-unit ms``), an accelerometer that reads ~1 at rest
 (units of g), a gyro whose rates exceed any walking range on more than a handful of samples (units of deg/s),
 and strides over which the gyro's attitude disagrees with the accelerometer's (a wrong gyro scale or unit, a
-flipped accelerometer). No stance found by the detector is an error too.
+flipped accelerometer; strides holding clipped samples are not judged, since saturation alone spoils them). No
+stance found by the detector is an error too.
 Warnings (returned in :class:`CheckReport` with counts and issued with ``warnings.warn``): irregular sample
 intervals, gaps longer than :data:`GAP_PERIODS` sample periods, no rest at the start, static specific force far
 from gravity or not along +z, a static gyro offset too large for rad/s, a handful of gyro samples above any
-walking rate (glitches), flat tops at a column's extreme (clipping, at any range).
+walking rate (glitches), flat tops at a column's extreme (clipping, at any range; with the strides the closure
+check left out for it).
 """
 
 from __future__ import annotations
@@ -127,8 +129,21 @@ def rest_runs(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
     return starts[long_enough], ends[long_enough]
 
 
+def stride_spans(t: np.ndarray, rests: tuple[np.ndarray, np.ndarray], spoiled: np.ndarray | None = None) -> np.ndarray:
+    """(rests - 1,) bool: which gaps between consecutive rests (:func:`rest_runs`) are strides the closure check
+    judges: ``STRIDE_RANGE_S`` long and, with ``spoiled`` ((N,) bool), holding none of those samples."""
+    starts, ends = rests
+    first, last = ends[:-1] - 1, starts[1:]
+    stride = (STRIDE_RANGE_S[0] <= t[last] - t[first]) & (t[last] - t[first] <= STRIDE_RANGE_S[1])
+    if spoiled is not None:
+        count = np.concatenate([[0], np.cumsum(spoiled)])
+        stride &= count[last + 1] == count[first]
+    return stride
+
+
 def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
-                          rests: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                          rests: tuple[np.ndarray, np.ndarray] | None = None,
+                          spoiled: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Speed (m/s) and tilt (rad) each stride ends with when the gyro carries the accelerometer's attitude.
 
     For each pair of rests (:func:`rest_runs`) ``STRIDE_RANGE_S`` apart, the attitude levelled on the first
@@ -139,6 +154,8 @@ def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravi
     gyro scaled wrong (or in deg/s) against the accelerometer: gravity is projected with the wrong attitude
     through the swing. (Flipping every accelerometer sign mirrors the walk and closes; that one shows at rest as
     gravity along -z.) ``rests``: ``rest_runs(t, acc, gyr, gravity)`` when the caller has them already.
+    ``spoiled``: (N,) bool, samples that make a stride unfit to judge (clipped readings: a saturated sensor
+    misses rate or force the stride had, whatever its scale); strides holding one are left out.
 
     Returns
     -------
@@ -147,33 +164,29 @@ def closure_between_rests(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravi
     """
     starts, ends = rest_runs(t, acc, gyr, gravity) if rests is None else rests
     first, last = ends[:-1] - 1, starts[1:]
-    stride = (STRIDE_RANGE_S[0] <= t[last] - t[first]) & (t[last] - t[first] <= STRIDE_RANGE_S[1])
+    stride = stride_spans(t, (starts, ends), spoiled)
     rests = np.column_stack([starts, ends])
     found = stride_closure(t, acc, gyr, rests[:-1][stride], first[stride],
                            np.column_stack([last, last + 1])[stride], rests[1:][stride], gravity)
     return np.linalg.norm(found.velocity, axis=1), found.angle
 
 
-def flat_tops(x: np.ndarray, rest_level: np.ndarray, rest_sd: np.ndarray) -> dict[str, int]:
-    """Samples in runs of >= CLIP_MIN_RUN consecutive samples sitting exactly at a column's maximum or minimum,
-    where that extreme lies more than CLIP_MIN_SPREAD rest standard deviations from the rest level (so that a
-    quantised still signal is not read as clipping), per column name (``acc_x`` ...)."""
-    found = {}
-    for label, columns in (("acc", slice(0, 3)), ("gyr", slice(3, 6))):
-        block = x[:, columns]
-        for i, axis in enumerate("xyz"):
-            column = block[:, i]
-            level, spread = rest_level[columns][i], max(rest_sd[columns][i], 1e-12)
-            count = 0
-            for extreme in (column.max(), column.min()):
-                if abs(extreme - level) <= CLIP_MIN_SPREAD * spread:
-                    continue
-                at = np.concatenate([[0], (column == extreme).astype(np.int8), [0]])
-                edges = np.diff(at)
-                lengths = np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)
-                count += int(lengths[lengths >= CLIP_MIN_RUN].sum())
-            if count:
-                found[f"{label}_{axis}"] = count
+def flat_tops(x: np.ndarray, rest_level: np.ndarray, rest_sd: np.ndarray) -> np.ndarray:
+    """(N, 6) bool: samples in runs of >= CLIP_MIN_RUN consecutive samples sitting exactly at a column's maximum
+    or minimum, where that extreme lies more than CLIP_MIN_SPREAD rest standard deviations from the rest level
+    (so that a quantised still signal is not read as clipping); columns acc_x, acc_y, acc_z, gyr_x, gyr_y,
+    gyr_z."""
+    found = np.zeros(x.shape, bool)
+    for c in range(x.shape[1]):
+        column = x[:, c]
+        spread = max(rest_sd[c], 1e-12)
+        for extreme in (column.max(), column.min()):
+            if abs(extreme - rest_level[c]) <= CLIP_MIN_SPREAD * spread:
+                continue
+            edges = np.diff(np.concatenate([[0], (column == extreme).astype(np.int8), [0]]))
+            for start, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+                if end - start >= CLIP_MIN_RUN:
+                    found[start:end, c] = True
     return found
 
 
@@ -245,7 +258,8 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
                     "accelerometer's signs are flipped (z must point up when the foot is flat)")
     rate_norm = np.linalg.norm(gyr, axis=1)
     peak_rate = float(rate_norm.max())
-    fast = int(np.sum(rate_norm > MAX_WALKING_RATE))
+    # per axis: a gyro's range is per axis, and one saturated at +-2000 deg/s (34.9 rad/s) in a run is not deg/s
+    fast = int(np.sum(np.abs(gyr).max(axis=1) > MAX_WALKING_RATE))
     report.counts.update(peak_rate=peak_rate, samples_above_walking_rate=fast)
     if fast > max(1, MAX_GLITCH_SHARE * n):
         report.refuse("units" in allow, f"{name}: columns gyr_*: {fast} of {n} samples exceed {MAX_WALKING_RATE} rad/s "
@@ -267,12 +281,21 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
                     "filter aligns on the first stationary window")
     both = np.column_stack([acc, gyr])
     window = both[start:end]
-    clipped = flat_tops(both, window.mean(axis=0), window.std(axis=0))
+    tops = flat_tops(both, window.mean(axis=0), window.std(axis=0))
+    clipped = {f"{label}_{axis}": int(n_top) for (label, axis), n_top
+               in zip(((lb, ax) for lb in ("acc", "gyr") for ax in "xyz"), tops.sum(axis=0)) if n_top}
     if clipped:
         report.warn(f"{name}: flat tops at a column's extreme value (possible clipping), samples per column: "
                     f"{clipped}", clipped_samples=clipped)
-    speed, tilt = closure_between_rests(t, acc, gyr, gravity, rests)
+    speed, tilt = closure_between_rests(t, acc, gyr, gravity, rests, spoiled=tops.any(axis=1))
     report.counts["closure_strides"] = len(speed)
+    if clipped:
+        every = int(stride_spans(t, rests).sum())
+        report.counts["closure_strides_clipped"] = every - len(speed)
+        if len(speed) < MIN_CLOSURE_STRIDES <= every:
+            report.warn(f"{name}: gyro against accelerometer not judged: {every - len(speed)} of {every} strides "
+                        f"hold clipped samples (a saturated sensor misses rate or force the stride had), "
+                        f"{len(speed)} left, {MIN_CLOSURE_STRIDES} needed")
     if len(speed) >= MIN_CLOSURE_STRIDES:
         median = float(np.median(speed))
         off = int(np.sum(speed > MAX_CLOSURE_SPEED))
@@ -283,7 +306,7 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
                           f"to the next, {off} of {len(speed)} strides end faster than {MAX_CLOSURE_SPEED:g} m/s "
                           f"(median {median:.3g} m/s, tilt off by {math.degrees(np.median(tilt)):.1f} deg) where the "
                           "foot is still: a wrong gyro scale or unit against the accelerometer"
-                          + (f" (or the clipping flagged above: {clipped})" if clipped else "") + "; pass "
+                          + "; pass "
                           "allow=('closure',) (gaitsim nav --allow closure) to navigate anyway")
     return report
 

@@ -227,11 +227,13 @@ def _mutations():
 
 
 MUTATIONS = _mutations()
-REFUSED = {"time in ms", "time in us", "gyro x2", "gyro in deg/s", "acc in g", "gyro clipped at 250 deg/s",
+REFUSED = {"time in ms", "time in us", "gyro x2", "gyro in deg/s", "acc in g",
            "NaN in imu", "repeated timestamp", "n/a cell", "truncated line", "garbage imu", "empty imu",
            "header only", "NaN in truth", "truth rows dropped", "reference time backwards", "meta.json a list",
            "meta.json not JSON"}
-FLAGGED = {"acc sign flipped": "along -z", "starts mid-walk": "does not start at rest", "2 s gap": "gaps longer",
+# clipping is flagged, and the strides it spoils are left out of the gyro-against-accelerometer closure (a sensor
+# saturating in running would otherwise be refused as a wrong gyro scale)
+FLAGGED = {"gyro clipped at 250 deg/s": "not judged", "acc sign flipped": "along -z", "starts mid-walk": "does not start at rest", "2 s gap": "gaps longer",
            "reference dropouts": "tracking dropouts", "corrupt twin": "unreadable binary twin"}
 
 

@@ -79,3 +79,47 @@ def test_oracle_and_increments_need_truth(walk):
         pipeline.navigate(bare, pipeline.NavOptions(detector="oracle"))
     with pytest.raises(RecordingError, match="increments"):
         pipeline.navigate(bare, pipeline.NavOptions(method="increments"))
+
+
+def _saturate_every_swing(rec, gyr):
+    """The gyro clipped at 60 % of its peak rate about y: a flat top in every swing (numpy only)."""
+    limit = 0.6 * np.abs(gyr[:, 1]).max()
+    out = gyr.copy()
+    out[:, 1] = np.clip(out[:, 1], -limit, limit)
+    return out
+
+
+def test_a_gyro_scaled_wrong_is_refused_but_not_when_saturation_spoils_every_stride():
+    rec = synthetic_walk(strides=6)
+    with pytest.raises(RecordingError, match="gyro against accelerometer"):
+        check_recording(variant(rec, gyr=rec.gyr * 3.0))
+    # clipped in every swing: the closure cannot tell a scale from saturation, so it is not judged (a warning)
+    clipped = variant(rec, gyr=_saturate_every_swing(rec, rec.gyr * 3.0))
+    with pytest.warns(UserWarning, match="not judged: 6 of 6 strides hold clipped samples"):
+        report = check_recording(clipped)
+    assert report.counts["closure_strides"] == 0 and report.counts["closure_strides_clipped"] == 6
+    assert report.counts["clipped_samples"]["gyr_y"] > 0
+
+
+def test_strides_without_clipping_are_still_judged():
+    rec = synthetic_walk(strides=6)
+    gyr = rec.gyr * 3.0
+    swing = ~rec.truth.stance
+    first_two = swing & (rec.t < rec.t[np.flatnonzero(swing)[0]] + 2 * 1.4)  # the swings of the first two strides
+    limit = np.abs(gyr[~first_two, 1]).max()  # the range: the other strides peak at it, these two beyond
+    gyr[first_two, 1] = np.clip(1.2 * gyr[first_two, 1], -limit, limit)
+    with pytest.raises(RecordingError, match="4 of 4 strides end faster"):
+        check_recording(variant(rec, gyr=gyr))
+
+
+def test_one_axis_saturated_at_2000_deg_per_s_is_not_deg_per_s():
+    rec = synthetic_walk(strides=3)
+    gyr = rec.gyr.copy()
+    burst = slice(2000, 2400)  # 0.5 s: 10 % of the samples
+    gyr[burst, 1] = np.radians(1999.0)
+    gyr[burst, 2] = 3.0  # rad/s on another axis: the norm exceeds 35 rad/s, no single axis does
+    with pytest.warns(UserWarning):
+        report = check_recording(variant(rec, gyr=gyr), allow=("closure",))
+    assert report.counts["samples_above_walking_rate"] == 0
+    with pytest.raises(RecordingError, match="reports deg/s"):
+        check_recording(variant(rec, gyr=np.degrees(rec.gyr)))
