@@ -56,6 +56,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--anchor-cap", type=float, default=_DEFAULT_ANCHOR.cap,
                    help="anchored detector: a calmest window at or above this factor of --threshold is motion, "
                         f"not stance, dimensionless (default {_DEFAULT_ANCHOR.cap:g})")
+    p.add_argument("--anchor-calm", type=float, default=_DEFAULT_ANCHOR.calm_s,
+                   help="anchored detector: the statistic is averaged over this centred duration before its calmest "
+                        f"stretch is sought, s (default {_DEFAULT_ANCHOR.calm_s:g})")
     p.add_argument("--adaptive-ratio", type=float, default=_DEFAULT_ADAPTIVE.ratio,
                    help="adaptive detector: threshold = max(--threshold, ratio x the span's peak gyro energy in "
                         f"sigma_g^2), dimensionless (default {_DEFAULT_ADAPTIVE.ratio:g}; 0: fixed threshold)")
@@ -97,7 +100,7 @@ def options_from_args(args) -> NavOptions:
     terms = tuple(x.strip() for x in args.calibration_terms.split(",") if x.strip())
     return NavOptions(
         detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g_dps),
-        window=args.window, anchor=CalmAnchor(args.anchor_span, args.anchor_widen, args.anchor_cap),
+        window=args.window, anchor=CalmAnchor(args.anchor_span, args.anchor_widen, args.anchor_cap, args.anchor_calm),
         adaptive=AdaptiveThreshold(args.adaptive_ratio, args.adaptive_span, args.adaptive_window),
         filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,

@@ -51,3 +51,13 @@ def test_bad_recording_writes_nothing(recording, tmp_path, capsys):
     assert cli.main(["nav", str(bad), "--out", str(out)]) == 2
     assert "NaN" in capsys.readouterr().err
     assert not out.exists() and list(tmp_path.glob(".nav*")) == []
+
+
+def test_the_default_detector_and_its_settings_reach_the_score(recording, tmp_path):
+    folder, _ = recording
+    out = tmp_path / "nav"
+    assert cli.main(["nav", str(folder), "--out", str(out), "--anchor-span", "0.4", "--anchor-widen", "3",
+                     "--anchor-cap", "20", "--anchor-calm", "0.03"]) == 0
+    info = json.loads((out / "score.json").read_text())["info"]["detector"]
+    assert info["detector"] == "anchored"
+    assert info["adaptation"] == {"half_span_s": 0.4, "widen": 3.0, "cap": 20.0, "calm_s": 0.03}
