@@ -11,7 +11,7 @@ import pytest
 
 from gaitsim.loop import attribution as att
 from gaitsim.loop import effects as fx
-from gaitsim.loop import fig5, residuals, settings
+from gaitsim.loop import command, fig5, residuals, settings
 from gaitsim.loop import twin as tw
 from gaitsim.loop.navigation import NavReference
 from gaitsim.loop.signature import signature
@@ -142,3 +142,10 @@ def test_halved_stance_rates_are_named_stance_kinematics_of_half_the_twins():
 def test_doubled_stance_rates_are_named_stance_kinematics_of_twice_the_twins():
     named = {a["effect"]: a["magnitude"] for a in _scaled_rates_loop(2.0, 1).attributions}
     assert named.get("stance_kinematics") == pytest.approx(2.0, rel=0.3), named
+
+
+def test_the_kinematics_cross_validation_pairs_stay_within_a_dataset_and_go_from_gaitmap_to_ucr():
+    labels = dict.fromkeys(["gaitmap-healthy/left", "gaitmap-healthy/right", "ucr-fgo/left", "xio-ngimu/short_walk"])
+    pairs = set(command.kinematics_pairs(labels))
+    assert pairs == {("gaitmap-healthy/left", "gaitmap-healthy/right"), ("gaitmap-healthy/right", "gaitmap-healthy/left"),
+                     ("gaitmap-healthy/left", "ucr-fgo/left"), ("gaitmap-healthy/right", "ucr-fgo/left")}
