@@ -191,12 +191,13 @@ def kinematics_pairs(results: dict) -> list[tuple[str, str]]:
 
 
 def _run_kinematics(folder: Path, results: dict) -> list[str]:
-    """The stance-kinematics cross-validation into ``folder``/held_out_kinematics.json; the README lines."""
+    """The stance-kinematics cross-validation into ``folder``/held_out_kinematics.json and its README lines
+    (nothing when no pair has the Fig. 5 residuals)."""
     rows = transfer.kinematics_table(results, kinematics_pairs(results),
                                      log=lambda m: print(f"  {m}", flush=True))
-    write_json(folder / "held_out_kinematics.json", rows)
     if not rows:
         return []
+    write_json(folder / "held_out_kinematics.json", rows)
     return ["", "## Held-out stance kinematics", "", transfer.KINEMATICS_NOTE, ""] + transfer.KINEMATICS_HEADER + \
         transfer.kinematics_markdown_rows(rows)
 
