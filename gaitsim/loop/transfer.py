@@ -21,7 +21,8 @@ The stance kinematics are cross-validated on their own (:func:`kinematics_table`
 ``stance_kinematics`` factor is fitted to each source's default twin by the loop's own fit (whether or not the
 loop named it there) and applied to the target's default twin. Old defaults = the simulator's stance rates
 (factor 1, the target's default twin); new = the rates times the source's factor. Both are scored on the
-target's Fig. 5 residuals (``q_fig5``: sum of z^2 over :data:`gaitsim.loop.fig5.NUMBERS`) and ``q_signature``;
+target's Fig. 5 residuals (``q_fig5``, :func:`fig5_prediction_error`: sum over :data:`gaitsim.loop.fig5.NUMBERS`
+of the squared error in units of the recording's own uncertainty) and ``q_signature``;
 the factor fitted on the target itself is given for comparison, not used.
 """
 
@@ -52,8 +53,20 @@ def score(target: att.LoopResult, twin: tw.Twin, simulate: tw.TwinSimulator) -> 
     side = att.simulate_side(simulate, twin, target.measured, True)
     res = att.compare(target.measured, side, target.noise)
     return {"q_signature": residuals.signature_misfit(res), "nav_discrepancy": nav_discrepancy(res),
-            "q_fig5": float(sum(res[name].z ** 2 for name in fig5.NUMBERS if name in res)),
-            "fig5": {name: res[name].as_dict() for name in fig5.NUMBERS if name in res}}
+            **fig5_prediction_error(target, res)}
+
+
+def fig5_prediction_error(target: att.LoopResult, res: dict) -> dict:
+    """``q_fig5``: sum over the Fig. 5 residuals ``res`` of (recording - twin)^2 over the recording's own
+    uncertainty squared (its bootstrap standard error and the comparison floor, not the twin's spread: a twin
+    whose sweep scatters, e.g. a filter that loses its stances, must not predict better by it), and
+    ``fig5``: each residual with that uncertainty (name -> dict)."""
+    out = {}
+    for name in fig5.NUMBERS:
+        if name in res:
+            own = math.hypot(target.measured.signature.scalars[name].se, target.noise.get(name, 0.0))
+            out[name] = {**res[name].as_dict(), "recording_uncertainty": own, "prediction_z": abs(res[name].value) / own}
+    return {"q_fig5": float(sum(v["prediction_z"] ** 2 for v in out.values())), "fig5": out}
 
 
 def transferred_score(target: att.LoopResult, effects: list[tuple[str, float]], simulate: tw.TwinSimulator) -> dict:
@@ -123,7 +136,8 @@ def markdown_rows(dataset: str, rows: list[dict]) -> list[str]:
 KINEMATICS = "stance_kinematics"
 KINEMATICS_NOTE = ("The stance_kinematics factor (1 = the simulator's stance rates, the old defaults) fitted to each "
                    "source recording's default twin, applied to the target's default twin (new defaults) and scored "
-                   "on the target's Fig. 5 residuals (q_fig5 = sum of z^2; lower predicts better).")
+                   "on the target's Fig. 5 residuals (q_fig5 = sum of (recording - twin)^2 over the recording's own "
+                   "uncertainty squared; lower predicts better).")
 
 
 def kinematics_factor(result: att.LoopResult, simulate: tw.TwinSimulator) -> dict | None:
