@@ -33,8 +33,9 @@
    explained), lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
    bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
-   recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
-   at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
+   recording shows). Its magnitude is searched on the signature residuals it moves (navigation and the Fig. 5
+   residuals, :mod:`gaitsim.loop.fig5`, are checked at the fitted magnitude; the Fig. 5 residuals are searched
+   on by an effect marked ``Effect.sweeps``), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record). The other
    acceptable candidates whose misfit lies within ``settings.NOISE_LEVEL ** 2`` of the named one's (less than
@@ -271,8 +272,8 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
                    ctx: dict, noise: dict) -> Fit:
     """One magnitude search of ``effect`` in context ``ctx``: grid, then bounded Brent around the best point."""
     use_nav = all(name.startswith("nav_") for name in effect.moves)  # navigated only when that is all it moves
-    use_fig5 = any(name in fig5.NUMBERS for name in effect.moves)  # swept when it moves the Fig. 5 residuals
-    names = [n for n in base if n in effect.moves and (use_nav or not n.startswith("nav_"))]
+    names = [n for n in base if n in effect.moves and (use_nav or not n.startswith("nav_"))
+             and (effect.sweeps or n not in fig5.NUMBERS)]
     low, high = effect.search_bounds(ctx)
     cache = {}
 
@@ -281,7 +282,7 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
         if key not in cache:
             try:
                 changed = tw.match_noise(twin.with_changes(effect.changes(float(m), ctx)), simulate)
-                side = simulate_side(simulate, changed, measured, with_nav, with_fig5=use_fig5 or with_nav)
+                side = simulate_side(simulate, changed, measured, with_nav, with_fig5=effect.sweeps or with_nav)
             except (ValueError, RecordingError):  # e.g. the twin no longer shows regular strides
                 cache[key] = (math.inf, {}, None)
             else:

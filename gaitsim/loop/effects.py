@@ -26,7 +26,10 @@ re-run the sensor model on the cached walk).
 
 "Fig. 5" are the four Fig. 5 residuals (:mod:`gaitsim.loop.fig5`: the length underestimate's and the in-window
 velocity's level and slope over the zero-velocity thresholds), present where the recording has a position track.
-The stance effects that move the IMU site in stance move them; their searches then sweep every candidate twin.
+The stance effects that move the IMU site in stance move them. Only ``stance_kinematics``, the effect meant to
+explain them, is searched on them (``Effect.sweeps``: every candidate twin swept, ~5x the cost of a signature);
+the others are searched on the signature residuals they move and meet the Fig. 5 residuals at the fitted
+magnitude, as they meet navigation.
 
 The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, bias, time and
 g-sensitivity errors apart: each turns gravity or the specific force its own way while the foot pitches. The
@@ -78,6 +81,7 @@ class Effect:
     changes : (magnitude, context) -> {section: {key: value}} merged into the twin's scenario document.
     first_guess : (residuals, context) -> magnitude or None, a closed-form estimate from the residuals.
     refine : the context (a direction) comes from the residuals: fit once more from the first fit's residuals.
+    sweeps : its magnitude is searched on the Fig. 5 residuals it moves too (each candidate twin swept).
     """
 
     name: str
@@ -90,6 +94,7 @@ class Effect:
     first_guess: Callable = lambda res, ctx: None
     log_scale: bool = False
     refine: bool = False
+    sweeps: bool = False
 
     def search_bounds(self, context: dict) -> tuple[float, float]:
         """Bounds for this recording: a bandwidth stays below ``settings.BAND_TOP_SHARE`` times the sample rate; a
@@ -220,7 +225,8 @@ LIBRARY: tuple[Effect, ...] = (
            "pitch rate times its height above the contact)",
            "[micromotion] " + ", ".join(STANCE_RATE_KEYS), "1",
            ("stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_gyro", "stance_acc_spread", "stance_duration",
-            "stance_velocity", "nav_length_ratio") + FIG5, (0.0, 4.0), _kinematics_changes, _kinematics_guess),
+            "stance_velocity", "nav_length_ratio") + FIG5, (0.0, 4.0), _kinematics_changes, _kinematics_guess,
+           sweeps=True),
     Effect("stance_roll", "roll-over of the foot about the heel-toe axis during stance (micro-rotation)",
            "[micromotion] stance_roll_rate_dps", "deg/s",
            ("stance_gyro", "stance_acc_spread", "stance_duration"), (0.0, 60.0),

@@ -2,13 +2,14 @@
 velocity inside the detected stance windows change with the zero-velocity threshold.
 
 The recording is swept against its position reference and the twin against its own true track at the IMU site,
-both by :func:`gaitsim.stance.sweep.sweep` (the same code, the same thresholds, mechanisation
-``settings.NAV_OPTIONS.method``). Each curve becomes two numbers (:data:`NUMBERS`), with the standard deviation of
+both by :func:`gaitsim.stance.sweep.sweep` (the same code, mechanisation ``settings.NAV_OPTIONS.method``), at
+the thresholds ``settings.FIG5_THRESHOLDS`` (1e4, 3e4, 5e4: the stance study's five would cost the loop 1.8x
+per sweep). Each curve becomes two numbers (:data:`NUMBERS`), with the standard deviation of
 the sweep's block bootstrap over strides (``settings.FIG5_BOOTSTRAP`` draws) as their standard error:
 
 - ``fig5_underestimate_level_pp``: the length underestimate (percentage points of the reference distance between
   consecutive detected-stance middles), mean over the thresholds;
-- ``fig5_underestimate_slope_pp``: the underestimate at the largest minus at the smallest threshold;
+- ``fig5_underestimate_slope_pp``: the underestimate at the largest minus at the smallest threshold (5e4 - 1e4);
 - ``fig5_window_velocity_level_mps``: the mean forward velocity of the track inside the detected windows (m/s),
   mean over the thresholds;
 - ``fig5_window_velocity_slope_mps``: the same at the largest minus at the smallest threshold.
@@ -40,7 +41,7 @@ def fig5_scalars(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray) -> 
     """The Fig. 5 numbers of ``rec`` against the track (t (M,) s, pos (M, 3) m) as signature scalars
     (name -> :class:`gaitsim.loop.signature.Scalar`, value and bootstrap standard deviation; module docstring)."""
     curves = {curve for curve, _, _ in NUMBERS.values()}
-    swept = sweep(rec, track_t, track_pos, bootstrap=settings.FIG5_BOOTSTRAP,
+    swept = sweep(rec, track_t, track_pos, thresholds=settings.FIG5_THRESHOLDS, bootstrap=settings.FIG5_BOOTSTRAP,
                   method=settings.NAV_OPTIONS.method, quantities=tuple(sorted(curves)))
     return {name: Scalar(getattr(swept.curves[curve], part), getattr(swept.curves[curve], f"{part}_sd"))
             for name, (curve, part, _) in NUMBERS.items()}
