@@ -102,7 +102,7 @@ def test_bootstrap_curves_are_deterministic_and_bounded(default_walk):
 
 
 def test_comparison_takes_the_real_uncertainty_as_the_bound_where_it_is_larger():
-    curve = lambda v, sd: sweeps.Curve(np.array(v), np.array(sd), v[-1] - v[0], 0.05)  # noqa: E731
+    curve = lambda v, sd: sweeps.Curve(np.array(v), np.array(sd), v[-1] - v[0], 0.05, float(np.mean(v)), 0.05)  # noqa: E731
     real = sweeps.Sweep(np.array([1e4, 5e4]), {"underestimate_pct": curve([1.0, 1.4], [0.1, 0.5]),
                                                "in_window_velocity_mps": curve([0.002, 0.004], [0.001, 0.001]),
                                                "window_s": curve([0.2, 0.3], [0.01, 0.1])}, 10)

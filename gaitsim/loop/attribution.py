@@ -33,8 +33,9 @@
    explained), lies inside its search range (a magnitude on the range's edge is no estimate: the minimum was not
    bracketed), and does no harm: no other residual, navigation included, that was at the noise level may end
    beyond ``settings.HARM_FACTOR`` times it (an effect that trades one residual for another is not what the
-   recording shows). Its magnitude is searched on the signature residuals it moves (navigation is checked
-   at the fitted magnitude), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
+   recording shows). Its magnitude is searched on the signature residuals it moves (navigation and the Fig. 5
+   residuals, :mod:`gaitsim.loop.fig5`, are checked at the fitted magnitude; the Fig. 5 residuals are searched
+   on by an effect marked ``Effect.sweeps``), unless navigation is all it moves. An effect that moves only navigation residuals (``g_sensitivity``) is fitted and reported as a
    candidate but never named: a single navigation number is closed by any effect that moves it.
    Otherwise the residual is reported ``"unexplained"`` (with the best candidate for the record). The other
    acceptable candidates whose misfit lies within ``settings.NOISE_LEVEL ** 2`` of the named one's (less than
@@ -70,7 +71,7 @@ from nav.recording import Recording, RecordingError
 
 from ..measured.reference import as_measured, reference_track
 from . import effects as fx
-from . import residuals, settings
+from . import fig5, residuals, settings
 from . import twin as tw
 from .frame import FrameCheck, require_body_frame
 from .navigation import NAV_UNITS, NavReference, nav_reference, navigation_metrics, same_kind
@@ -119,11 +120,15 @@ class LoopResult:
         return out
 
 
-def measure(rec: Recording, ref: NavReference, with_nav: bool = True) -> Side:
+def measure(rec: Recording, ref: NavReference, with_nav: bool = True, with_fig5: bool | None = None) -> Side:
     """Signature (with the continuous reference's track, its detector at the recording's gravity,
-    :attr:`nav.recording.Recording.gravity`) and, optionally, the navigation metrics ``ref`` allows."""
+    :attr:`nav.recording.Recording.gravity`) and, optionally, the navigation metrics ``ref`` allows. The Fig. 5
+    numbers (:mod:`gaitsim.loop.fig5`) join the signature's scalars when ``with_fig5`` (default: ``with_nav``)
+    and the reference is a track."""
     pos_t, pos = reference_track(rec) if ref.kind == "track" else (None, None)
     sig = signature(rec.t, rec.acc, rec.gyr, pos_t, pos, rec.gravity)
+    if (with_nav if with_fig5 is None else with_fig5) and pos is not None:
+        sig.scalars.update(fig5.fig5_scalars(rec, pos_t, pos))
     if not with_nav:
         return Side(rec, ref, sig, {})
     nav, sol = navigation_metrics(rec, ref)
@@ -131,12 +136,12 @@ def measure(rec: Recording, ref: NavReference, with_nav: bool = True) -> Side:
 
 
 def simulate_side(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, with_nav: bool,
-                  seed: int | None = None) -> Side:
-    """Simulate the twin and measure it like the recording (same kind of reference)."""
+                  seed: int | None = None, with_fig5: bool | None = None) -> Side:
+    """Simulate the twin and measure it like the recording (same kind of reference; :func:`measure`)."""
     sim = same_kind(as_measured(simulate(twin, seed)), measured.reference)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # input checks on candidate twins (e.g. clipping) are expected
-        return measure(sim, measured.reference, with_nav)
+        return measure(sim, measured.reference, with_nav, with_fig5)
 
 
 def compare(measured: Side, twin: Side, noise: dict) -> dict:
@@ -267,7 +272,8 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
                    ctx: dict, noise: dict) -> Fit:
     """One magnitude search of ``effect`` in context ``ctx``: grid, then bounded Brent around the best point."""
     use_nav = all(name.startswith("nav_") for name in effect.moves)  # navigated only when that is all it moves
-    names = [n for n in base if n in effect.moves and (use_nav or not n.startswith("nav_"))]
+    names = [n for n in base if n in effect.moves and (use_nav or not n.startswith("nav_"))
+             and (effect.sweeps or n not in fig5.NUMBERS)]
     low, high = effect.search_bounds(ctx)
     cache = {}
 
@@ -276,7 +282,7 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
         if key not in cache:
             try:
                 changed = tw.match_noise(twin.with_changes(effect.changes(float(m), ctx)), simulate)
-                side = simulate_side(simulate, changed, measured, with_nav)
+                side = simulate_side(simulate, changed, measured, with_nav, with_fig5=effect.sweeps or with_nav)
             except (ValueError, RecordingError):  # e.g. the twin no longer shows regular strides
                 cache[key] = (math.inf, {}, None)
             else:

@@ -10,7 +10,9 @@ a recording whose frame is not x toes, y left, z up is refused with the map to u
 
 Every recording's folder gets ``report.md``, ``attribution.json``, ``twin.toml`` (the fitted twin, which
 ``gaitsim generate`` runs) and figures; DIR gets a ``README.md`` summary. A dataset of several recordings also
-gets the held-out prediction (:mod:`gaitsim.loop.transfer`): ``held_out.json`` and a table in the summary. A
+gets the held-out prediction (:mod:`gaitsim.loop.transfer`): ``held_out.json`` and a table in the summary;
+recordings with a position track get the stance-kinematics cross-validation, within a dataset and from
+gaitmap-healthy onto ucr-fgo (:data:`CROSS_DATASET`): ``held_out_kinematics.json`` and a table. A
 recording the loop cannot use is a failure: its folder holds a ``report.md`` saying why, the summary lists it,
 the other recordings go on, and the command exits 1. Written atomically: nothing appears at DIR when every recording failed.
 """
@@ -31,6 +33,8 @@ from ..numbers import shown
 from . import attribution, blind, report, settings, transfer
 
 DATASETS = ("gaitmap-healthy", "ucr-fgo", "xio-ngimu")
+# (source dataset, target dataset): the stance kinematics fitted on the first are also scored on the second
+CROSS_DATASET = (("gaitmap-healthy", "ucr-fgo"),)
 CHOICES = DATASETS + ("blind", "all")
 
 
@@ -164,14 +168,38 @@ def _run_blind(folder: Path) -> list[str]:
     return [f"| [blind tests](blind.md) | {'; '.join(summary)} | | |"]
 
 
-def _run_target(target: str, folder: Path, args, workers: int = 1) -> tuple[list[str], list[str], list[str]]:
+def _run_target(target: str, folder: Path, args, workers: int = 1) -> tuple[list[str], list[str], list[str], dict]:
     """One target of the command (a dataset, ``blind`` or a recording folder) into ``folder``, each recording's
-    loop on ``workers`` processes: its summary lines, failures and held-out table lines."""
+    loop on ``workers`` processes: its summary lines, failures, held-out table lines and loop results (label ->
+    :class:`gaitsim.loop.attribution.LoopResult`)."""
     folder.mkdir(parents=True, exist_ok=True)
     if target == "blind":
-        return _run_blind(folder), [], []
+        return _run_blind(folder), [], [], {}
     found, failed, results = _run_recordings(target, folder, args, workers)
-    return found, failed, (_run_held_out(target, folder, results) if len(results) > 1 else [])
+    return found, failed, (_run_held_out(target, folder, results) if len(results) > 1 else []), results
+
+
+def kinematics_pairs(results: dict) -> list[tuple[str, str]]:
+    """(source, target) labels ``dataset/recording`` of the stance-kinematics cross-validation
+    (:func:`gaitsim.loop.transfer.kinematics_table`): every ordered pair within a dataset, and every recording of
+    the first dataset of a :data:`CROSS_DATASET` pair onto every recording of the second."""
+    def dataset(label: str) -> str:
+        return label.rsplit("/", 1)[0]
+
+    return [(a, b) for a in results for b in results if a != b and (
+        dataset(a) == dataset(b) or (dataset(a), dataset(b)) in CROSS_DATASET)]
+
+
+def _run_kinematics(folder: Path, results: dict) -> list[str]:
+    """The stance-kinematics cross-validation into ``folder``/held_out_kinematics.json and its README lines
+    (nothing when no pair has the Fig. 5 residuals)."""
+    rows = transfer.kinematics_table(results, kinematics_pairs(results),
+                                     log=lambda m: print(f"  {m}", flush=True))
+    if not rows:
+        return []
+    write_json(folder / "held_out_kinematics.json", rows)
+    return ["", "## Held-out stance kinematics", "", transfer.KINEMATICS_NOTE, ""] + transfer.KINEMATICS_HEADER + \
+        transfer.kinematics_markdown_rows(rows)
 
 
 def run(args) -> int:
@@ -189,7 +217,7 @@ def run(args) -> int:
         raise RecordingError(f"loop: {args.dataset!r} is neither a dataset ({', '.join(CHOICES)}) nor a recording "
                              "folder")
     targets = list(DATASETS) + ["blind"] if args.dataset == "all" else [args.dataset]
-    failures, recordings, held_out = [], 0, []
+    failures, recordings, held_out, results = [], 0, [], {}
     with atomic_output_dir(args.out, overwrite=args.force) as tmp:
         lines = ["# Sim-to-real loop results", "", f"Regenerate with `gaitsim loop {args.dataset} --out DIR`.", "",
                  "| recording | residual -> effect (fitted) | navigation metric (measured) | "
@@ -200,8 +228,9 @@ def run(args) -> int:
                 outcomes = list(pool.map(_run_target, targets, folders, [args] * len(targets)))
         else:
             outcomes = [_run_target(target, folder, args, args.jobs) for target, folder in zip(targets, folders)]
-        for target, (found, failed, held) in zip(targets, outcomes):
+        for target, (found, failed, held, loops) in zip(targets, outcomes):
             prefix = f"{target}/" if len(targets) > 1 else ""
+            results.update({f"{target}/{label}": result for label, result in loops.items()})
             recordings += len(found)
             failures += failed
             held_out += held
@@ -211,6 +240,7 @@ def run(args) -> int:
                       "| dataset | effects of -> applied to | effects (alone: lowers the target's misfit?) | "
                       "q_signature default -> transferred | better | navigation discrepancy default -> "
                       "transferred |", "|---|---|---|---|---|---|"] + held_out
+        lines += _run_kinematics(tmp, results)
         if failures:
             lines += ["", f"**{len(failures)} recording(s) failed:**", ""] + [f"- {f}" for f in failures]
         (tmp / "README.md").write_text("\n".join(lines) + "\n")

@@ -8,9 +8,10 @@ re-run the sensor model on the cached walk).
 
 | effect | scenario key | unit | moves |
 |---|---|---|---|
-| stance_creep | [micromotion] creep_velocity_mps (forward) | m/s | stance_velocity, nav_length_ratio |
+| stance_creep | [micromotion] creep_velocity_mps (forward) | m/s | stance_velocity, Fig. 5, nav_length_ratio |
+| stance_kinematics | [micromotion] heel_rise_rate_start_dps, heel_rise_growth_dps3, loading_roll_rate_dps, pronation_rate_dps, all x the factor | 1 | stance_rate_x/y/z, stance_gyro, stance_acc_spread, stance_duration, stance_velocity, Fig. 5, nav_length_ratio |
 | stance_roll | [micromotion] stance_roll_rate_dps | deg/s | stance_gyro, stance_acc_spread, stance_duration |
-| stance_rotation | [micromotion] stance_rotation_dps (direction from the residual) | deg/s | stance_rate_x/y/z, stance_gyro, stance_acc_spread, stance_duration, stance_velocity, nav_length_ratio |
+| stance_rotation | [micromotion] stance_rotation_dps (direction from the residual) | deg/s | stance_rate_x/y/z, stance_gyro, stance_acc_spread, stance_duration, stance_velocity, Fig. 5, nav_length_ratio |
 | impact_ringing | [impact] ringing_accel_mps2 (ringing_hz from the residual spectrum) | m/s^2 | onset_hf, hf40, hf80, acc_peak, stance_acc_spread, stance_duration |
 | bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
@@ -22,6 +23,13 @@ re-run the sensor model on the cached walk).
 | accel_bias_x, _y, _z | [sensor] accel_bias, one component + b (mount tilt kept on the rest reading) | m/s^2 | stride closure, rest_acc_norm, acc profiles, navigation |
 | g_sensitivity | [sensor] gyro_g_sensitivity = k I (gyro_bias keeps the rest reading) | deg/s/(m/s^2) | stride closure tilt, navigation |
 | saturation | [sensor] accel_range | m/s^2 | acc_peak, hf40, hf80, onset_hf, accelerometer profiles |
+
+"Fig. 5" are the four Fig. 5 residuals (:mod:`gaitsim.loop.fig5`: the length underestimate's and the in-window
+velocity's level and slope over the zero-velocity thresholds), present where the recording has a position track.
+The stance effects that move the IMU site in stance move them. Only ``stance_kinematics``, the effect meant to
+explain them, is searched on them (``Effect.sweeps``: every candidate twin swept, ~5x the cost of a signature);
+the others are searched on the signature residuals they move and meet the Fig. 5 residuals at the fitted
+magnitude, as they meet navigation.
 
 The stride closure (``closure_*``, :mod:`gaitsim.loop.closure`) is what tells the sensor's scale, bias, time and
 g-sensitivity errors apart: each turns gravity or the specific force its own way while the foot pitches. The
@@ -46,13 +54,16 @@ from nav.recording import Recording
 
 from ..scenario import Scenario, section_table
 from ..world.foot import FootModel
-from . import settings
+from . import fig5, settings
 from .signature import Signature
 
 ACC_PROFILES = ("profile_acc_x", "profile_acc_y", "profile_acc_z")
 GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
 CLOSURE = ("closure_forward", "closure_left", "closure_up", "closure_roll", "closure_pitch")
 NAV = ("nav_length_ratio", "nav_heading_drift", "nav_final_error")
+FIG5 = tuple(fig5.NUMBERS)
+# the stance model's rotation rates (scenario keys, [micromotion]) that stance_kinematics scales together
+STANCE_RATE_KEYS = ("heel_rise_rate_start_dps", "heel_rise_growth_dps3", "loading_roll_rate_dps", "pronation_rate_dps")
 
 
 @dataclass(frozen=True)
@@ -70,6 +81,7 @@ class Effect:
     changes : (magnitude, context) -> {section: {key: value}} merged into the twin's scenario document.
     first_guess : (residuals, context) -> magnitude or None, a closed-form estimate from the residuals.
     refine : the context (a direction) comes from the residuals: fit once more from the first fit's residuals.
+    sweeps : its magnitude is searched on the Fig. 5 residuals it moves too (each candidate twin swept).
     """
 
     name: str
@@ -82,6 +94,7 @@ class Effect:
     first_guess: Callable = lambda res, ctx: None
     log_scale: bool = False
     refine: bool = False
+    sweeps: bool = False
 
     def search_bounds(self, context: dict) -> tuple[float, float]:
         """Bounds for this recording: a bandwidth stays below ``settings.BAND_TOP_SHARE`` times the sample rate; a
@@ -135,6 +148,19 @@ def _rotation_changes(magnitude: float, ctx: dict) -> dict:
     creep = np.asarray(ctx["creep_velocity_mps"], float).copy()
     creep[0] -= change[1] * height - change[2] * side
     return {"micromotion": {"stance_rotation_dps": rotation.tolist(), "creep_velocity_mps": creep.tolist()}}
+
+
+def _kinematics_changes(factor: float, ctx: dict) -> dict:
+    """The twin's stance rotation rates (:data:`STANCE_RATE_KEYS`: heel rise at foot flat and its growth,
+    loading roll pulse, held pronation) all multiplied by ``factor`` (1 = no change): a foot that rolls over its
+    contact faster or slower through the whole stance, its IMU site's velocity following (rate times height)."""
+    return {"micromotion": {key: factor * ctx["stance_rates"][key] for key in STANCE_RATE_KEYS}}
+
+
+def _kinematics_guess(res, ctx):
+    """The factor that scales the twin's mean core-stance |rate| to the recording's (both include sensor noise)."""
+    m, w = _value(res, "stance_gyro", "measured"), _value(res, "stance_gyro", "twin")
+    return None if m is None or not w > 0 else m / w
 
 
 def _creep_guess(res, ctx):
@@ -192,8 +218,15 @@ def _g_sensitivity_changes(magnitude: float, ctx: dict) -> dict:
 
 LIBRARY: tuple[Effect, ...] = (
     Effect("stance_creep", "forward creep of the foot during foot flat (stance micro-motion magnitude)",
-           "[micromotion] creep_velocity_mps", "m/s", ("stance_velocity", "nav_length_ratio"), (-0.02, 0.06),
+           "[micromotion] creep_velocity_mps", "m/s", ("stance_velocity", "nav_length_ratio") + FIG5, (-0.02, 0.06),
            lambda m, ctx: {"micromotion": {"creep_velocity_mps": [m, 0.0, 0.0]}}, _creep_guess),
+    Effect("stance_kinematics", "the rolling foot's stance rotation rates (heel rise, loading roll, pronation) "
+           "scaled together by one factor (1 = the twin's current rates; the IMU site's stance velocity follows, "
+           "pitch rate times its height above the contact)",
+           "[micromotion] " + ", ".join(STANCE_RATE_KEYS), "1",
+           ("stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_gyro", "stance_acc_spread", "stance_duration",
+            "stance_velocity", "nav_length_ratio") + FIG5, (0.0, 4.0), _kinematics_changes, _kinematics_guess,
+           sweeps=True),
     Effect("stance_roll", "roll-over of the foot about the heel-toe axis during stance (micro-rotation)",
            "[micromotion] stance_roll_rate_dps", "deg/s",
            ("stance_gyro", "stance_acc_spread", "stance_duration"), (0.0, 60.0),
@@ -202,7 +235,7 @@ LIBRARY: tuple[Effect, ...] = (
            "direction is the core-stance rate residual turned into the foot frame, the magnitude is fitted)",
            "[micromotion] stance_rotation_dps", "deg/s",
            ("stance_rate_x", "stance_rate_y", "stance_rate_z", "stance_gyro", "stance_acc_spread", "stance_duration",
-            "stance_velocity", "nav_length_ratio"), (0.0, 30.0),
+            "stance_velocity", "nav_length_ratio") + FIG5, (0.0, 30.0),
            _rotation_changes, lambda res, ctx: float(np.linalg.norm(_rotation_target(ctx))), refine=True),
     Effect("impact_ringing", "damped vertical ringing of foot and mount after heel strike and forefoot slap",
            "[impact] ringing_accel_mps2 (ringing_hz from the residual spectrum)", "m/s^2",
@@ -280,8 +313,8 @@ def clipped_runs(acc: np.ndarray) -> int:
 
 def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signature) -> dict:
     """Recording-dependent inputs of the effects: sample rate, ringing frequency, largest accelerometer reading,
-    mean specific force (m/s^2, sensor frame) over the detected stances, the twin's gyro bias (rad/s),
-    the twin's current creep, stance rotation, roll rate, IMU site (m, foot frame) and sensor roll/pitch on
+    whether the recording has the Fig. 5 residuals, mean specific force (m/s^2, sensor frame) over the detected stances, the twin's gyro bias (rad/s),
+    the twin's current creep, stance rotation, roll rate, stance rotation rates (:data:`STANCE_RATE_KEYS`), IMU site (m, foot frame) and sensor roll/pitch on
     the foot (rad), and the stance rotation (deg/s, foot frame) that closes the core-stance rate residual (the
     twin's, plus the residual turned from the sensor into the foot frame by the twin's mounting misalignment).
     Values are in the units of the scenario keys the effects set, the mount's roll and pitch in rad (the yaw
@@ -295,11 +328,13 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
     rotation = np.asarray(micro["stance_rotation_dps"], float) + sensor_to_foot @ rate_gap
     return {"rate_hz": measured.rate_hz,
             "stance_rotation_dps": list(micro["stance_rotation_dps"]),
+            "stance_rates": {key: float(micro[key]) for key in STANCE_RATE_KEYS},
             "stance_rotation_target_dps": rotation.tolist(),
             "imu_site_m": site.tolist(),
             "ringing_hz": round(ringing_frequency(measured, twin_sig), 1),
             "largest_acc_component": float(np.max(np.abs(rec.acc))),
             "clipped_runs": clipped_runs(rec.acc),
+            "has_fig5": all(name in measured.scalars for name in fig5.NUMBERS),
             "creep_velocity_mps": list(micro["creep_velocity_mps"]),
             "creep_mps": float(micro["creep_velocity_mps"][0]),
             "stance_roll_rate_dps": float(micro["stance_roll_rate_dps"]),
@@ -319,10 +354,13 @@ def context(rec: Recording, twin: Scenario, measured: Signature, twin_sig: Signa
 def applicable(effect: Effect, ctx: dict) -> bool:
     """False when the recording cannot show the effect: ringing without a usable spectrum band, saturation
     without flat tops at the largest reading (:func:`clipped_runs`; lower impact peaks alone are as well the
-    gait's)."""
+    gait's), the stance kinematics without the Fig. 5 residuals (no position track: the stance rates alone are
+    as well a sustained rotation's or a mount's, :mod:`gaitsim.loop.fig5`)."""
     if effect.name == "impact_ringing":
         return math.isfinite(ctx["ringing_hz"]) and ctx["ringing_hz"] >= settings.MIN_RINGING_HZ
     if effect.name == "saturation" and ctx["clipped_runs"] < settings.MIN_CLIPPED_RUNS:
+        return False
+    if effect.name == "stance_kinematics" and not ctx["has_fig5"]:
         return False
     low, high = effect.search_bounds(ctx)
     return high > low

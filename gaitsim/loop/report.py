@@ -3,7 +3,8 @@
 ``attribution.json`` holds, per residual acted on, the effect named (or ``"unexplained"``), the scenario key,
 the fitted magnitude and unit, the residual before and after with uncertainties, whether it is at the noise
 level after, the fraction explained, the candidates that fit as well (``equivalent``) and every candidate tried;
-then the predicted-versus-measured navigation metrics before and after, all residuals before and after, and the fitted twin (its scenario document, which a
+then the predicted-versus-measured navigation metrics before and after, the Fig. 5 residuals before and after
+(or why the recording has none; :func:`gaitsim.loop.fig5.summary`), all residuals before and after, and the fitted twin (its scenario document, which a
 user can save as TOML and simulate). ``twin.toml`` is the twin after all accepted effects as a scenario file
 (``gaitsim generate twin.toml --out DIR`` simulates it).
 """
@@ -22,7 +23,7 @@ from nav.files import jsonable, write_json  # noqa: E402
 
 from ..numbers import shown  # noqa: E402
 from . import attribution as att  # noqa: E402
-from . import settings  # noqa: E402
+from . import fig5, settings  # noqa: E402
 from .residuals import profile_fit  # noqa: E402
 from .twin_file import write_twin_toml  # noqa: E402
 from .signature import CHANNELS  # noqa: E402
@@ -40,6 +41,7 @@ def attribution_document(result: att.LoopResult, label: str) -> dict:
         "explained_threshold": settings.EXPLAINED_FRACTION,
         "attributions": result.attributions,
         "navigation": result.navigation_summary(),
+        "fig5": fig5.summary(result.residuals_before, result.residuals_after, result.measured.reference.kind),
         "comparison_noise": result.noise,
         "residuals_before": {k: r.as_dict() for k, r in result.residuals_before.items()},
         "residuals_after": {k: r.as_dict() for k, r in result.residuals_after.items()},
@@ -133,6 +135,18 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
     for key, v in result.navigation_summary().items():
         lines.append(f"| {key} ({v['unit']}) | {shown(v['measured'])} | {shown(v['twin_before'])} | "
                      f"{shown(v['twin_after'])} | {shown(v['discrepancy_before'])} | {shown(v['discrepancy_after'])} |")
+    lines += ["", "## Fig. 5: length underestimate and in-window velocity over the zero-velocity thresholds", ""]
+    figure5 = fig5.summary(result.residuals_before, result.residuals_after, result.measured.reference.kind)
+    if "absent_because" in figure5:
+        lines.append(f"Absent: {figure5['absent_because']}.")
+    else:
+        lines += ["Recording against its reference, twin against its true track at the IMU site, both swept by "
+                  "`gaitsim.stance.sweep` (level = mean over the thresholds, slope = largest minus smallest).", "",
+                  "| residual | unit | recording | twin before | z before | twin after | z after |",
+                  "|---|---|---|---|---|---|---|"]
+        for key, v in figure5["residuals"].items():
+            lines.append(f"| {key} | {v['unit']} | {shown(v['recording'])} | {shown(v['twin_before'])} | "
+                         f"{shown(v['z_before'], '.3g')} | {shown(v['twin_after'])} | {shown(v['z_after'], '.3g')} |")
     lines += ["", f"## Phase profiles: twin within {settings.PROFILE_SPREAD_FACTOR:g}x the recording's "
               "stride-to-stride spread?", "", "| channel | share of phases within | largest ratio | phases beyond (% of "
               "stride) |", "|---|---|---|---|"]

@@ -6,7 +6,9 @@ error (and the floor) as its uncertainty (pure noise then gives a ratio near 1, 
 twin fit itself is off by (measured by the loop on a twin of its own twin). A residual is at the noise level when
 ``|value| <= settings.NOISE_LEVEL * uncertainty``.
 
-Navigation residuals (length ratio, heading drift) are added by :mod:`gaitsim.loop.attribution`, which runs
+The Fig. 5 residuals (:mod:`gaitsim.loop.fig5`) are signature scalars of a recording with a position track,
+measured only where the loop navigates (they run the filter at every threshold). Navigation residuals (length
+ratio, heading drift) are added by :mod:`gaitsim.loop.attribution`, which runs
 the filter.
 """
 
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import settings
+from . import fig5, settings
 from .signature import CHANNELS, Signature
 
 UNITS = {
@@ -26,7 +28,7 @@ UNITS = {
     "swing_axis_yaw": "deg", "stance_velocity": "m/s", "rest_acc_norm": "m/s^2", "rest_gyro_change": "deg/s",
     "rest_acc_change": "m/s^2", "closure_forward": "m/s", "closure_left": "m/s", "closure_up": "m/s",
     "closure_roll": "deg", "closure_pitch": "deg",
-    **{f"profile_{c}": ("m/s^2" if c.startswith("acc") else "deg/s") for c in CHANNELS},
+    **{f"profile_{c}": ("m/s^2" if c.startswith("acc") else "deg/s") for c in CHANNELS}, **fig5.UNITS,
 }
 
 

@@ -39,6 +39,8 @@ MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives n
 # -- residuals (gaitsim.loop.residuals) ----------------------------------------------------------------------
 NOISE_LEVEL = 3.0  # 1, a residual with |value| <= NOISE_LEVEL x uncertainty is at the noise level
 PROFILE_SPREAD_FACTOR = 2.0  # 1, the twin's profile should lie within this x the recording's stride-to-stride sd
+FIG5_BOOTSTRAP = 200  # block-bootstrap draws of the Fig. 5 residuals (gaitsim.loop.fig5; the stance study uses 1000)
+FIG5_THRESHOLDS = (1.0e4, 3.0e4, 5.0e4)  # SHOE thresholds of the loop's sweeps (the stance study's five cost 1.8x)
 UNCERTAINTY_FLOOR = {"stance_velocity": 0.0005, "swing_axis_yaw": 0.05}  # m/s, deg: reference / axis resolution
 
 # -- twin fit (gaitsim.loop.twin) ----------------------------------------------------------------------------

@@ -24,6 +24,8 @@ Definitions (the same for a measured recording and its simulated twin):
   mean velocity over that run, in the walking frame, forward along the stride; the filter applies it along
   its own heading, so a toe-out of a few degrees turns a few percent of it sideways). What that removes is the share the foot's motion inside
   the windows causes; what remains comes from elsewhere (sensor errors, integration, the swing).
+- Level: the mean of a curve over the thresholds, with its bootstrap spread from the same draws (the loop's
+  Fig. 5 residuals, :mod:`gaitsim.loop.fig5`).
 - Uncertainty: bootstrap over strides, in blocks of ``BLOCK_STRIDES`` consecutive strides: an error in the
   solution's position at one stance middle lengthens one step and shortens the next, so neighbouring steps
   are anticorrelated and only whole runs of strides resample the sum's spread. The walk is cut into blocks at
@@ -196,19 +198,25 @@ def _steps(sol, w: Windows) -> np.ndarray:
 
 
 def run_threshold(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, threshold: float,
-                  method: str = "auto") -> ThresholdResult:
+                  method: str = "auto", track_pseudo: bool = True) -> ThresholdResult:
     """Navigate ``rec`` at ``threshold`` (mechanisation ``method``) and measure it against the site track
-    (t (N,) s, pos (N, 3) m)."""
+    (t (N,) s, pos (N, 3) m); without ``track_pseudo`` the second navigation (the track's velocity as the
+    stance pseudo-measurement) is skipped and ``step_estimate_track_pseudo`` is NaN."""
     t = np.asarray(rec.t, float)
     sol = pipeline.navigate(rec, nav_options(threshold, method=method))
     stationary = np.asarray(sol.stationary, bool).copy()
     stationary[:sol.start] = False
     w = windows(t, stationary, track_t, track_pos)
-    with_track = pipeline.navigate(rec, nav_options(threshold, track_pseudo_velocity(t, track_t, track_pos, w), method))
+    steps = _steps(sol, w)
+    if track_pseudo:
+        pseudo = track_pseudo_velocity(t, track_t, track_pos, w)
+        steps_pseudo = _steps(pipeline.navigate(rec, nav_options(threshold, pseudo, method)), w)
+    else:
+        steps_pseudo = np.full_like(steps, np.nan)
     return ThresholdResult(
-        threshold=float(threshold), step_start=w.stance_time[:-1], step_estimate=_steps(sol, w),
+        threshold=float(threshold), step_start=w.stance_time[:-1], step_estimate=steps,
         step_track=np.linalg.norm(np.diff(w.middle_pos[:, :2], axis=0), axis=1),
-        step_estimate_track_pseudo=_steps(with_track, w),
+        step_estimate_track_pseudo=steps_pseudo,
         walking=w.walking, stance_time=w.stance_time, window=w.window, window_displacement=w.displacement,
         window_duration=w.duration)
 
@@ -223,15 +231,20 @@ class Curve:
     sd : (T,) bootstrap standard deviation.
     slope : value at the largest minus at the smallest threshold.
     slope_sd : its bootstrap standard deviation.
+    level : mean of ``value`` over the thresholds.
+    level_sd : its bootstrap standard deviation.
     """
 
     value: np.ndarray
     sd: np.ndarray
     slope: float
     slope_sd: float
+    level: float
+    level_sd: float
 
     def as_dict(self) -> dict:
-        return {"value": self.value.tolist(), "sd": self.sd.tolist(), "slope": self.slope, "slope_sd": self.slope_sd}
+        return {"value": self.value.tolist(), "sd": self.sd.tolist(), "slope": self.slope, "slope_sd": self.slope_sd,
+                "level": self.level, "level_sd": self.level_sd}
 
 
 QUANTITIES = {
@@ -242,6 +255,7 @@ QUANTITIES = {
     "in_window_velocity_mps": lambda r, steps, stances: r.in_window_velocity(stances),
     "window_s": lambda r, steps, stances: r.window_mean(stances),
 }
+TRACK_PSEUDO_QUANTITIES = ("underestimate_track_pseudo_pct", "stance_velocity_share_pct")  # need 2nd navigation
 
 
 @dataclass
@@ -259,15 +273,22 @@ class Sweep:
 
 def _curve(values: np.ndarray, draws: np.ndarray) -> Curve:
     return Curve(values, np.nanstd(draws, axis=0, ddof=1), float(values[-1] - values[0]),
-                 float(np.nanstd(draws[:, -1] - draws[:, 0], ddof=1)))
+                 float(np.nanstd(draws[:, -1] - draws[:, 0], ddof=1)), float(np.mean(values)),
+                 float(np.nanstd(np.mean(draws, axis=1), ddof=1)))
 
 
 def sweep(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds=THRESHOLDS,
-          bootstrap: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, method: str = "auto") -> Sweep:
-    """Threshold sweep of ``rec`` against its site track with bootstrap curves (module docstring), navigated
-    with the mechanisation ``method``."""
+          bootstrap: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, method: str = "auto",
+          quantities=tuple(QUANTITIES)) -> Sweep:
+    """Threshold sweep of ``rec`` against its site track with bootstrap curves (module docstring) of the named
+    ``quantities`` (keys of :data:`QUANTITIES`), navigated with the mechanisation ``method``; the track's
+    pseudo-measurement run only when a quantity needs it (:data:`TRACK_PSEUDO_QUANTITIES`)."""
+    unknown = sorted(set(quantities) - set(QUANTITIES))
+    if unknown:
+        raise ValueError(f"sweep: quantities {unknown} unknown; allowed: {', '.join(QUANTITIES)}")
     thresholds = np.asarray(sorted(thresholds), float)
-    results = [run_threshold(rec, track_t, track_pos, th, method) for th in thresholds]
+    pseudo = any(name in TRACK_PSEUDO_QUANTITIES for name in quantities)
+    results = [run_threshold(rec, track_t, track_pos, th, method, pseudo) for th in thresholds]
     edges = results[-1].stance_time[BLOCK_STRIDES::BLOCK_STRIDES]
     blocks = len(edges) + 1
 
@@ -284,7 +305,8 @@ def sweep(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds
                    np.concatenate([stance_members[j][p] for p in pick])) for j in range(len(results))]
                  for pick in picks]
     curves = {}
-    for name, quantity in QUANTITIES.items():
+    for name in quantities:
+        quantity = QUANTITIES[name]
         values = np.array([quantity(r, None, None) for r in results])
         draws = np.full((bootstrap, len(results)), np.nan)
         for b, drawn in enumerate(resamples):
