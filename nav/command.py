@@ -28,6 +28,11 @@ from .solution import write_solution_into
 _DEFAULT_FILTER = FilterConfig()
 _DEFAULT_ADAPTIVE = AdaptiveThreshold()
 _DEFAULT_ANCHOR = CalmAnchor()
+ANCHOR_FLAGS = (  # (flag, CalmAnchor field, unit, meaning)
+    ("--anchor-span", "half_span_s", "s", "a stride's calmest window is the calmest within +- this"),
+    ("--anchor-widen", "widen", "dimensionless", "windows within this factor of the calmest one's statistic are taken"),
+    ("--anchor-cap", "cap", "dimensionless", "a calmest window at or above this factor of --threshold is motion"),
+    ("--anchor-calm", "calm_s", "s", "the statistic is averaged over this centred duration first"))
 _DEFAULT_DETECTOR = NavOptions().detector
 
 
@@ -47,18 +52,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--sigma-g-dps", type=float, default=math.degrees(DEFAULT_SIGMA_G),
                    help="detector gyro sigma, deg/s (default 0.1; converted to rad/s)")
     p.add_argument("--window", type=int, default=DEFAULT_WINDOW, help="detector window, samples (default 3)")
-    p.add_argument("--anchor-span", type=float, default=_DEFAULT_ANCHOR.half_span_s,
-                   help="anchored detector: a stride's calmest window is the calmest within +- this, s "
-                        f"(default {_DEFAULT_ANCHOR.half_span_s:g})")
-    p.add_argument("--anchor-widen", type=float, default=_DEFAULT_ANCHOR.widen,
-                   help="anchored detector: windows within this factor of the calmest one's statistic are taken, "
-                        f"dimensionless (default {_DEFAULT_ANCHOR.widen:g})")
-    p.add_argument("--anchor-cap", type=float, default=_DEFAULT_ANCHOR.cap,
-                   help="anchored detector: a calmest window at or above this factor of --threshold is motion, "
-                        f"not stance, dimensionless (default {_DEFAULT_ANCHOR.cap:g})")
-    p.add_argument("--anchor-calm", type=float, default=_DEFAULT_ANCHOR.calm_s,
-                   help="anchored detector: the statistic is averaged over this centred duration before its calmest "
-                        f"stretch is sought, s (default {_DEFAULT_ANCHOR.calm_s:g})")
+    for flag, field, unit, text in ANCHOR_FLAGS:
+        p.add_argument(flag, type=float, default=getattr(_DEFAULT_ANCHOR, field),
+                       help=f"anchored detector: {text}, {unit} (default {getattr(_DEFAULT_ANCHOR, field):g})")
     p.add_argument("--adaptive-ratio", type=float, default=_DEFAULT_ADAPTIVE.ratio,
                    help="adaptive detector: threshold = max(--threshold, ratio x the span's peak gyro energy in "
                         f"sigma_g^2), dimensionless (default {_DEFAULT_ADAPTIVE.ratio:g}; 0: fixed threshold)")
@@ -94,13 +90,18 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def _anchor(args) -> CalmAnchor:
+    """The anchored detector's settings from the ``ANCHOR_FLAGS`` arguments."""
+    return CalmAnchor(**{field: getattr(args, flag[2:].replace("-", "_")) for flag, field, _, _ in ANCHOR_FLAGS})
+
+
 def options_from_args(args) -> NavOptions:
     """NavOptions from parsed arguments (units converted once here)."""
     cfg = FilterConfig(states=args.states, zupt_sigma=args.zupt_sigma, zaru=args.zaru, level_sigma=args.level_sigma)
     terms = tuple(x.strip() for x in args.calibration_terms.split(",") if x.strip())
     return NavOptions(
         detector=args.detector, threshold=args.threshold, sigma_a=args.sigma_a, sigma_g=math.radians(args.sigma_g_dps),
-        window=args.window, anchor=CalmAnchor(args.anchor_span, args.anchor_widen, args.anchor_cap, args.anchor_calm),
+        window=args.window, anchor=_anchor(args),
         adaptive=AdaptiveThreshold(args.adaptive_ratio, args.adaptive_span, args.adaptive_window),
         filter=cfg, method=args.method, calibration=args.calibration, calibration_terms=terms,
         stance_velocity=args.stance_velocity, rts=args.rts,
