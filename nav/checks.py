@@ -282,8 +282,7 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
     both = np.column_stack([acc, gyr])
     window = both[start:end]
     tops = flat_tops(both, window.mean(axis=0), window.std(axis=0))
-    clipped = {f"{label}_{axis}": int(n_top) for (label, axis), n_top
-               in zip(((lb, ax) for lb in ("acc", "gyr") for ax in "xyz"), tops.sum(axis=0)) if n_top}
+    clipped = {column: int(count) for column, count in zip(IMU_COLUMNS[1:], tops.sum(axis=0)) if count}
     if clipped:
         report.warn(f"{name}: flat tops at a column's extreme value (possible clipping), samples per column: "
                     f"{clipped}", clipped_samples=clipped)
@@ -305,8 +304,7 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
             report.refuse("closure" in allow, f"{name}: gyro against accelerometer: carried by the gyro from one rest "
                           f"to the next, {off} of {len(speed)} strides end faster than {MAX_CLOSURE_SPEED:g} m/s "
                           f"(median {median:.3g} m/s, tilt off by {math.degrees(np.median(tilt)):.1f} deg) where the "
-                          "foot is still: a wrong gyro scale or unit against the accelerometer"
-                          + "; pass "
+                          "foot is still: a wrong gyro scale or unit against the accelerometer; pass "
                           "allow=('closure',) (gaitsim nav --allow closure) to navigate anyway")
     return report
 

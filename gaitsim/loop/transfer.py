@@ -162,12 +162,11 @@ def kinematics_table(results: dict, pairs=None, log=lambda message: None) -> lis
     simulate = tw.TwinSimulator()
     pairs = [(a, b) for a in results for b in results if a != b] if pairs is None else pairs
     factors = {label: kinematics_factor(results[label], simulate) for label in {x for pair in pairs for x in pair}}
+    pairs = [(a, b) for a, b in pairs if factors[a] is not None and factors[b] is not None]
+    old_scores = {b: score(results[b], results[b].twin_before, simulate) for b in {b for _, b in pairs}}
     rows = []
     for source, target in pairs:
-        if factors[source] is None or factors[target] is None:
-            continue
-        factor = factors[source]["factor"]
-        old = score(results[target], results[target].twin_before, simulate)
+        factor, old = factors[source]["factor"], old_scores[target]
         new = transferred_score(results[target], [(KINEMATICS, factor)], simulate)
         rows.append({"source": source, "target": target, "source_factor": factors[source],
                      "target_own_factor": factors[target], "old_defaults": old, "new_defaults": new,
