@@ -42,8 +42,20 @@ Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
   running recording to fit). An earlier reversal of -25000 deg/s^2 at toe off made the push-off pitch dip
   below level (to -11 deg at 150 steps/min: the heel under the ground, an 80 g spike once the sole rolls);
   without it the push-off pitch stays above level at every running cadence (tests/test_gaits.py). The forefoot strike then
-  peaks at ~1000-1100 deg/s, below the published ~1500 (a known miss: its swing turns back less than a
-  rearfoot strike's, which lands at -15 deg);
+  peaks at 1000-1050 deg/s (30 m and 200 m runs), below the published ~1500: a known miss (a strict xfail in
+  tests/test_gaits.py). Measured on the truth at 150, 165 and 180 steps/min (30 m runs, per-stride medians): its
+  peak is the toe-off rate itself, and its swing return is no larger (980-1010 deg/s): the pitch sweeps 167-177 deg
+  back from its swing maximum to the +8 deg landing over the rest of the swing and is still turning toes up at
+  contact (the toe rocker's -200 deg/s). The rearfoot swing sweeps 180-189 deg back to -27 deg, 0.09 s before
+  contact, then reverses onto its +200 deg/s heel strike: a shorter, larger return, 1335-1374 deg/s. A forefoot
+  swing that dorsiflexed past level and plantarflexed back before landing would close the gap, but no measurement
+  found shows one: forefoot strikers land with the ankle plantarflexed and the shank more vertical, their
+  plantarflexors switched on earlier (Ahn et al., J Sport Health Sci 3:102-112, 2014), with less tibialis anterior
+  and more gastrocnemius activity than rearfoot strikers in terminal swing (Yong, Silder & Delp, J Biomech
+  47:3593-3597, 2014); and no published foot-IMU peak rate of forefoot strikers alone was found (the ~1500 deg/s
+  below pools running up to 6.4 m/s). Both kinds' swing pitch, a Hermite from toe off to contact with no knot
+  between, rises to 164-185 deg (toes pointing backward, sole up), farther than a foot turns: a known defect of the
+  swing; a bounded swing would lower the rearfoot peak too;
   swing height 0.15 m; the stance micro-motion's ramps and pulses shortened to fit a ~0.06 s foot flat;
 - a running foot is never still: it pitches (heel rise from 30 deg/s) and rolls (25 deg/s held) through its
   short foot flat, so the stance's calmest rate is ~28 deg/s (median over strides; 15-49 deg/s with the
