@@ -1,4 +1,11 @@
-"""Where the sensor sits on the foot: its lever arm fitted to the recording's accelerometer profiles.
+"""Where the sensor sits on the foot: its height read from the push-off, its position along the foot fitted to the
+recording's accelerometer profiles.
+
+The height is the push-off's reading (:func:`gaitsim.loop.push_off.push_off_height`: the lever of a rigid turn
+about the still toe contact, from the recording's own gyro and accelerometer), which the twin's swing, gait shape
+and stance model do not enter. Fitted with the profiles below, the height went to its bound 0 on every shared
+recording (gaitmap's Vicon pose puts the sensor 4.2-4.8 cm above the floor): the profiles' misfit in the contact
+phases (several m/s^2, a twin whose foot does not move as the real one) pulls it there.
 
 For a given foot motion the specific force at a foot point r (foot frame, from the heel contact) is linear in r:
 ``f(r) = C^T (a_heel - g) + alpha x r + w x (w x r)`` in the foot frame, then turned by the sensor's mounting
@@ -6,7 +13,8 @@ rotation. Phase profiles (means over strides of the signal resampled on the gait
 twin is simulated three times on the same walk and seed (its mount site at the toes, then moved
 ``settings.PROBE_M``
 along x and z), giving the profiles as ``P(r) = P_0 + J (r - r_0)`` exactly; the lever arm is the bounded
-linear least-squares fit of the recording's three accelerometer profiles in the contact phases. The strides are segmented once, on the
+linear least-squares fit of the recording's three accelerometer profiles in the contact phases, with the height
+held at the push-off's reading (both fitted where the push-off gives none). The strides are segmented once, on the
 first simulation, so that every probe is cut at the same instants (its sensor noise is the same draw, and
 cancels in the differences).
 
@@ -15,6 +23,8 @@ the toe contact, within 7 cm of the mid line, up to 12 cm above the sole.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from scipy.optimize import lsq_linear
@@ -39,7 +49,8 @@ def contact_phases(heel_rocker_frac: float, foot_flat_frac: float, push_off_frac
     return (phase <= foot_flat_frac + push_off_frac) | (phase >= 1.0 - heel_rocker_frac)
 
 
-def fit_lever_arm(measured: Signature, simulate_at, phases: np.ndarray) -> tuple[np.ndarray, dict]:
+def fit_lever_arm(measured: Signature, simulate_at, phases: np.ndarray, height_m: float = math.nan
+                  ) -> tuple[np.ndarray, dict]:
     """Lever arm (m, foot frame from the heel contact) that best reproduces the measured accelerometer profiles.
 
     Only the ``phases`` where the foot turns about a ground contact are compared (:func:`contact_phases`): there
@@ -53,27 +64,34 @@ def fit_lever_arm(measured: Signature, simulate_at, phases: np.ndarray) -> tuple
     measured : the recording's signature.
     simulate_at : site (3,) m -> simulated :class:`nav.recording.Recording` of the twin with its IMU there.
     phases : (P,) bool, the phases compared.
+    height_m : m, the sensor's height above the sole (the push-off's reading), held within the bounds; NaN: fitted
+        with the position along the foot.
 
     Returns
     -------
     site : (3,) m.
     quality : rms misfit of the three accelerometer profiles (m/s^2) at the default site (the toes) and at
-        the fitted one.
+        the fitted one, and where the height came from.
     """
     origin = np.array(FootModel().lever_arm)
     base = simulate_at(origin)
     sig = signature(base.t, base.acc, base.gyr)
     use = np.tile(phases, len(ACC_CHANNELS))
     p0 = _acc_profiles(base, sig.strides)[use]
-    fitted_axes = (0, 2)
     jac = np.stack([(_acc_profiles(simulate_at(origin + settings.PROBE_M * np.eye(3)[i]), sig.strides)[use] - p0)
                     / settings.PROBE_M
-                    for i in fitted_axes], axis=1)
+                    for i in (0, 2)], axis=1)  # profiles are linear in the site: P = p0 + jac (x - x0, z - z0)
     target = np.concatenate([measured.profiles[c].mean for c in ACC_CHANNELS])[use]
-    low, high = (np.array(b)[list(fitted_axes)] for b in settings.SITE_BOUNDS_M)
-    found = lsq_linear(jac, target - p0 + jac @ origin[list(fitted_axes)], bounds=(low, high))
-    site = np.array([found.x[0], 0.0, found.x[1]])
-    misfit = target - p0 - jac @ (found.x - origin[list(fitted_axes)])
+    low, high = (np.array(b)[[0, 2]] for b in settings.SITE_BOUNDS_M)
+    xz0 = origin[[0, 2]]
+    held = bool(np.isfinite(height_m))
+    height = float(np.clip(height_m, low[1], high[1])) if held else math.nan
+    free = [0] if held else [0, 1]
+    shown = target - p0 - (jac[:, 1] * (height - xz0[1]) if held else 0.0)  # what the free coordinates fit
+    found = lsq_linear(jac[:, free], shown + jac[:, free] @ xz0[free], bounds=(low[free], high[free]))
+    site = np.array([found.x[0], 0.0, height if held else found.x[1]])
+    misfit = target - p0 - jac @ (site[[0, 2]] - xz0)
     return site, {"rms_acc_misfit_default_site_mps2": float(np.sqrt(np.mean((target - p0) ** 2))),
                   "rms_acc_misfit_fitted_site_mps2": float(np.sqrt(np.mean(misfit ** 2))),
-                  "phases_compared": int(phases.sum()), "site_m": site.tolist()}
+                  "phases_compared": int(phases.sum()), "site_m": site.tolist(),
+                  "height_from": "push-off" if held else "accelerometer profiles"}

@@ -28,6 +28,7 @@ HF_NYQUIST_MARGIN = 1.25  # 1, a band share is computed only when the Nyquist fr
 PUSH_OFF_S = 0.12  # s, window after each detected stance in which acc_gyro_lag fits the turn about the toe
 LAG_RANGE_MS = 15.0  # ms, acc_gyro_lag is searched over +- this
 LAG_STEP_MS = 1.0  # ms, grid step of that search (refined by a parabola)
+OUTLIER_SIGMAS = 3.0  # 1, the push-off height leaves out stances whose own height lies this many robust sigmas off
 ONSET_HF_EDGE_HZ = 30.0  # Hz, high-pass edge of |a| for onset_hf
 ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is taken
 BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate

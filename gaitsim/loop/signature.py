@@ -23,7 +23,7 @@ simulated, so two signatures can be compared number by number:
    onset_hf                    m/s^2     rms of |a| high-passed at ONSET_HF_EDGE_HZ over the first
                                          ONSET_WINDOW_S of the stance (impact ringing lives here)
    acc_gyro_lag                ms        the gyro's lag behind the accelerometer read from the push-off, a
-                                         turn about the still toe contact (:mod:`gaitsim.loop.lag`; > 0: the
+                                         turn about the still toe contact (:mod:`gaitsim.loop.push_off`; > 0: the
                                          gyro's samples come later), jackknife error over the stances
    swing_axis_yaw              deg       atan2(x, y) of the stride's dominant rotation axis (angular
                                          momentum direction of the gyro, sign so that y > 0)
@@ -59,7 +59,7 @@ from nav.series import resample
 
 from . import settings
 from .closure import closure_between_stances, following, middle_thirds
-from .lag import push_off_lag
+from .push_off import push_off_lag
 from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")

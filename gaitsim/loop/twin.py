@@ -17,9 +17,10 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
   above ``settings.HAIRPIN_TURN``) becomes a hairpin, its return leg moved sideways by two corner radii.
   When no polyline fits, a straight walk of the same length.
 - **Rest.** ``stand_start_s`` / ``stand_end_s`` from the first / last detected rest (at least ``settings.MIN_REST_S``).
-- **Sensor position** on the foot (:mod:`gaitsim.loop.mount_fit`): the position along the foot and the height
-  that best reproduce the recording's accelerometer phase profiles where the foot turns about a ground contact
-  (linear least squares over three simulations).
+- **Sensor position** on the foot (:mod:`gaitsim.loop.mount_fit`): the height above the sole read from the
+  push-off (a rigid turn about the still toe contact, :func:`gaitsim.loop.push_off.push_off_height`), and the
+  position along the foot that best reproduces the recording's accelerometer phase profiles where the foot turns
+  about a ground contact (linear least squares over three simulations).
 - **Foot side.** The stance model's roll (pronation) is a left foot's and is mirrored for a right foot: the twin
   is a right foot when the recording's mean core-stance roll rate (``stance_rate_x``) is negative.
 - **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window,
@@ -60,6 +61,7 @@ from ..world import path as paths
 from ..world.foot import FootModel
 from ..world.gait import GaitParams, ImpactParams
 from . import gait_fit, mount_fit, settings
+from .push_off import push_off_height
 from .signature import Signature, signature
 from .strides import stance_intervals
 
@@ -246,10 +248,13 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
     twin = Twin(scenario_from_dict(doc, "<twin>"), notes)
     gait = twin.scenario.walk.gait
     phases = mount_fit.contact_phases(gait.heel_rocker_frac, gait.foot_flat_frac, gait.push_off_frac)
+    lag = sig.scalars["acc_gyro_lag"].value
+    height, height_se, ahead = push_off_height(rec.t, rec.acc, rec.gyr, sig.stances, lag if math.isfinite(lag) else 0.0)
     site, site_quality = mount_fit.fit_lever_arm(
-        sig, lambda r: simulate(twin.with_changes({"mount": mount_table(r)})), phases)
+        sig, lambda r: simulate(twin.with_changes({"mount": mount_table(r)})), phases, height)
     twin = twin.with_changes({"mount": mount_table(site)})
-    twin.notes["mount_fit"] = site_quality
+    twin.notes["mount_fit"] = {**site_quality, "push_off_height_m": height, "push_off_height_se_m": height_se,
+                               "push_off_ahead_of_pivot_m": ahead}
     twin = match_noise(twin, simulate)
     for _ in range(settings.FIT_ITERATIONS):
         twin = _correct(twin, measured, simulate)
