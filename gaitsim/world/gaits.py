@@ -138,6 +138,7 @@ def run_tables(cadence: float, forefoot: bool) -> dict[str, dict]:
             "pitch_heel_strike_deg": 8.0 if forefoot else -15.0,
             "pitch_rate_heel_strike_dps": -200.0 if forefoot else 200.0,
             "pitch_toe_off_deg": 70.0, "pitch_rate_toe_off_dps": 1000.0, "pitch_accel_toe_off_dps2": 0.0,
+            "pitch_accel_to_swing_max_dps2": WALK_TOE_OFF_ACCEL * (cadence / WALK_FIT_CADENCE) ** 2,
             "swing_height_m": 0.15, "stride_length_sd_m": 0.04}
     impact = {"heel_strike_velocity_mps": [0.4, 0.0, -0.8], "heel_strike_duration_s": 0.015,
               "slap_rate_dps": 250.0, "slap_duration_s": 0.02}
