@@ -28,10 +28,10 @@ Sections and keys (every key optional unless marked; units in the key names):
 
 Every number must be finite and inside its physical range (:mod:`gaitsim.ranges`, tabulated in
 ``docs/scenario-ranges.md``); then the rules between keys hold: the phase fractions add up to 1, the swing
-fits (mean foot speed <= MAX_SWING_SPEED), its pitch maximum comes in its first half, the slap, heel strike and stance pulses fit their phases, ringing
-lies below the Nyquist frequency, the sensor's jitter, skew, clock error and bandwidths suit the sample rate,
-and one run stays below MAX_SAMPLES samples (estimated before anything is allocated). Rules over several keys
-are named after the key the user wrote.
+fits (mean foot speed <= MAX_SWING_SPEED) with its pitch maximum in its first half, the slap, heel strike and
+stance pulses fit their phases, ringing lies below the Nyquist frequency, the sensor's jitter, skew, clock error
+and bandwidths suit the sample rate, and one run stays below MAX_SAMPLES samples (estimated before anything is
+allocated). Rules over several keys are named after the key the user wrote.
 
 Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
 key, the value and what is allowed; nothing is written.
