@@ -90,6 +90,8 @@ RANGES: dict[str, dict[str, Range]] = {
         "pitch_toe_off_deg": Range(0, 90, "deg", GAIT_LITERATURE + ": 35-60 deg heel up", open_low=True),
         "pitch_rate_toe_off_dps": Range(-2500, 2500, "deg/s", PEAKS),
         "pitch_accel_toe_off_dps2": Range(-200_000, 200_000, "deg/s^2", "gaitmap: -8000 deg/s^2 after toe off, x25"),
+        "pitch_accel_to_swing_max_dps2": Range(-200_000, 0, "deg/s^2", "gaitmap: -8000 deg/s^2 after toe off, x25; "
+                                               "0: no swing maximum knot"),
         "swing_height_m": Range(0, 0.6, "m", GAIT_LITERATURE + ": heel clearance 0.05-0.3 m (running)"),
         "swing_lateral_m": Range(-0.3, 0.3, "m", GAIT_LITERATURE + ": a few cm of circumduction"),
         "swing_roll_deg": Range(-45, 45, "deg", GAIT_LITERATURE),

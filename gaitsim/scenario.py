@@ -28,10 +28,10 @@ Sections and keys (every key optional unless marked; units in the key names):
 
 Every number must be finite and inside its physical range (:mod:`gaitsim.ranges`, tabulated in
 ``docs/scenario-ranges.md``); then the rules between keys hold: the phase fractions add up to 1, the swing
-fits (mean foot speed <= MAX_SWING_SPEED), the slap, heel strike and stance pulses fit their phases, ringing
-lies below the Nyquist frequency, the sensor's jitter, skew, clock error and bandwidths suit the sample rate,
-and one run stays below MAX_SAMPLES samples (estimated before anything is allocated). Rules over several keys
-are named after the key the user wrote.
+fits (mean foot speed <= MAX_SWING_SPEED) with its pitch maximum in its first half, the slap, heel strike and
+stance pulses fit their phases, ringing lies below the Nyquist frequency, the sensor's jitter, skew, clock error
+and bandwidths suit the sample rate, and one run stays below MAX_SAMPLES samples (estimated before anything is
+allocated). Rules over several keys are named after the key the user wrote.
 
 Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
 key, the value and what is allowed; nothing is written.
@@ -64,6 +64,7 @@ IN_DEGREES = {
     GaitParams: {"pitch_heel_strike_deg": "pitch_heel_strike", "pitch_rate_heel_strike_dps": "pitch_rate_heel_strike",
                  "pitch_accel_heel_strike_dps2": "pitch_accel_heel_strike", "pitch_toe_off_deg": "pitch_toe_off",
                  "pitch_rate_toe_off_dps": "pitch_rate_toe_off", "pitch_accel_toe_off_dps2": "pitch_accel_toe_off",
+                 "pitch_accel_to_swing_max_dps2": "pitch_accel_to_swing_max",
                  "swing_roll_deg": "swing_roll", "toe_out_deg": "toe_out", "pitch_sd_deg": "pitch_sd"},
     ImpactParams: {"slap_rate_dps": "slap_rate"},
     MicroMotionParams: {"heel_rise_rate_start_dps": "heel_rise_rate_start", "heel_rise_growth_dps3": "heel_rise_growth",
@@ -77,6 +78,7 @@ WRITTEN_DIGITS = 15  # significant digits of a converted value written back (the
 # exact to them)
 
 MAX_SWING_SPEED = 10.0  # m/s, mean foot speed over the swing (stride / swing time); sprinting feet reach ~2x this at peak
+MAX_SWING_MAX_SHARE = 0.5  # the swing's pitch maximum comes in its first half (the foot turns back to land)
 MAX_STRIDE_SD_SHARE = 0.25  # stride-to-stride spread of the stride length, share of the stride (4 sd stay > 0)
 RADIUS_ROUNDING = 1e-9  # relative: a radius of exactly one step survives the rounding of a path's geometry
 DEFAULT_RATE_HZ = 800.0  # [sampling] rate_hz when not given
@@ -242,6 +244,15 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
         raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("swing_frac", "stride_length_m", "cadence_steps_per_min")},
                       written, f"the foot would cover the stride in {swing_s:.3g} s of swing at a mean "
                                f"{swing_speed:.3g} m/s; at most {MAX_SWING_SPEED} m/s (a sprinting foot)")
+    if g.pitch_accel_to_swing_max < 0:
+        stop_s = g.pitch_rate_toe_off / -g.pitch_accel_to_swing_max
+        if not 0 < stop_s < MAX_SWING_MAX_SHARE * swing_s:
+            raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("pitch_accel_to_swing_max_dps2",
+                                                                    "pitch_rate_toe_off_dps", "swing_frac",
+                                                                    "cadence_steps_per_min")}, written,
+                          f"the swing's pitch maximum comes pitch_rate_toe_off / |pitch_accel_to_swing_max| = "
+                          f"{stop_s:.3g} s after toe off; it needs a toe-off rate turning the toes down (> 0) and "
+                          f"must come in the first {MAX_SWING_MAX_SHARE:.0%} of the swing ({swing_s:.3g} s)")
     if g.stride_length_sd_m > MAX_STRIDE_SD_SHARE * g.stride_length_m:
         raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("stride_length_sd_m", "stride_length_m")}, written,
                       f"the stride-to-stride spread must be at most {MAX_STRIDE_SD_SHARE:.0%} of the stride")

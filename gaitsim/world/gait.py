@@ -44,6 +44,12 @@ class GaitParams:
     pitch_rate_toe_off : rad/s, pitch rate at toe off. Default 150 deg/s.
     pitch_accel_toe_off : rad/s^2, pitch acceleration at toe off; measured feet reverse their push-off
         rotation right after toe off (gaitmap: about -8000 deg/s^2), which a zero here cannot show. Default 0.
+    pitch_accel_to_swing_max : rad/s^2, at most 0: mean pitch acceleration from toe off to the swing's pitch
+        maximum. A negative value adds a knot to the swing at that maximum (zero rate, acceleration ``a``), reached
+        ``pitch_rate_toe_off / |a|`` after toe off, ``pitch_rate_toe_off^2 / (2 |a|)`` above the toe-off pitch:
+        where a steady deceleration at ``a`` stops the toe-off rotation
+        (:func:`gaitsim.world.profile.swing_maximum`); the running kinds use it (:mod:`gaitsim.world.gaits`).
+        Default 0: no knot, the swing pitch is one Hermite from toe off to initial contact.
     swing_height_m : m, heel height at mid-swing. Default 0.08.
     swing_lateral_m : m, sideways excursion of the heel at mid-swing, positive to the left. Default 0.01.
     swing_roll : rad, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3 deg.
@@ -70,6 +76,7 @@ class GaitParams:
     pitch_toe_off: float = math.radians(45.0)
     pitch_rate_toe_off: float = math.radians(150.0)
     pitch_accel_toe_off: float = 0.0
+    pitch_accel_to_swing_max: float = 0.0
     swing_height_m: float = 0.08
     swing_lateral_m: float = 0.01
     swing_roll: float = math.radians(3.0)

@@ -41,22 +41,33 @@ Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
   (200 deg/s toward level) are set so that the simulated peaks reach the published ones below (no measured
   running recording to fit). An earlier reversal of -25000 deg/s^2 at toe off made the push-off pitch dip
   below level (to -11 deg at 150 steps/min: the heel under the ground, an 80 g spike once the sole rolls);
-  without it the push-off pitch stays above level at every running cadence (tests/test_gaits.py). The forefoot strike then
-  peaks at 1000-1050 deg/s (30 m and 200 m runs), below the published ~1500: a known miss (a strict xfail in
-  tests/test_gaits.py). Measured on the truth at 150, 165 and 180 steps/min (30 m runs, per-stride medians): its
-  peak is the toe-off rate itself, and its swing return is no larger (980-1010 deg/s): the pitch sweeps 167-177 deg
-  back from its swing maximum to the +8 deg landing over the rest of the swing and is still turning toes up at
-  contact (the toe rocker's -200 deg/s). The rearfoot swing sweeps 180-189 deg back to -27 deg, 0.09 s before
-  contact, then reverses onto its +200 deg/s heel strike: a shorter, larger return, 1335-1374 deg/s. A forefoot
-  swing that dorsiflexed past level and plantarflexed back before landing would close the gap, but no measurement
-  found shows one: forefoot strikers land with the ankle plantarflexed and the shank more vertical, their
-  plantarflexors switched on earlier (Ahn et al., J Sport Health Sci 3:102-112, 2014), with less tibialis anterior
-  and more gastrocnemius activity than rearfoot strikers in terminal swing (Yong, Silder & Delp, J Biomech
-  47:3593-3597, 2014); and no published foot-IMU peak rate of forefoot strikers alone was found (the ~1500 deg/s
-  below pools running up to 6.4 m/s). Both kinds' swing pitch, a Hermite from toe off to contact with no knot
-  between, rises to 164-185 deg (toes pointing backward, sole up), farther than a foot turns: a known defect of the
-  swing; a bounded swing would lower the rearfoot peak too;
-  swing height 0.15 m; the stance micro-motion's ramps and pulses shortened to fit a ~0.06 s foot flat;
+  without it the push-off pitch stays above level at every running cadence (tests/test_gaits.py); swing height
+  0.15 m; the stance micro-motion's ramps and pulses shortened to fit a ~0.06 s foot flat;
+- after toe off the foot keeps turning toes down until a swing pitch maximum stops it
+  (``pitch_accel_to_swing_max_dps2``, :func:`gaitsim.world.profile.swing_maximum`): the toe-off rate brought to
+  zero by a steady deceleration at the walking recordings' reversal (``WALK_TOE_OFF_ACCEL``, -6350 deg/s^2 at
+  103 steps/min) scaled with the cadence squared as for the walking kinds (-13500 / -16300 / -19400 deg/s^2 at
+  150 / 165 / 180 steps/min). The maximum comes 74 / 61 / 52 ms after toe off (15 / 13 / 12 % of the swing) at
+  37 / 31 / 26 deg above the toe-off pitch: 107 / 100 / 95 deg (median; 94-109 over strides and cadences), toes
+  down and pointing slightly back, the sole facing backward. The same law puts the walking kinds' own swing
+  maximum, made by their toe-off reversal, within 0.5 ms and 0.01 deg (tests/test_gaits.py). No published running foot-segment angle through swing was
+  found to check it against (searched: foot segment / foot-to-ground angle in running swing, foot-IMU pitch
+  in running; the running studies found report the angle at contact only: Falbriard et al., Front Bioeng
+  Biotechnol 8:65, 2020; foot strike angle: Altman & Davis above): an extrapolation of a walking measurement
+  by the walking kinds' cadence law, not a running fit. The knot keeps the deceleration (zero rate, acceleration
+  a, jerk a^2 / toe-off rate: the acceleration relaxes in the time it took to stop the rotation); a flat
+  maximum (zero acceleration) was a still foot in mid-swing that nav's default detector took for a stance (10-16
+  false updates per 60 m at 800 Hz). Before this knot the swing pitch was one Hermite from toe off to contact and
+  rose to 164-185 deg (toes pointing backward, sole up), which gave the rearfoot strike its 1335-1374 deg/s by
+  sweeping ~185 deg back before its heel strike. Both strikes now peak at their toe-off rate, 1000-1040 deg/s
+  (30 m runs at 150, 165 and 180 steps/min), below the published ~1500: a known miss (strict xfails in
+  tests/test_gaits.py); the peak specific force stays 13.8-15.0 g. A faster rotation at toe off or a return that
+  reverses before contact would raise it, but no measurement found gives either for these runners: forefoot
+  strikers land with the ankle plantarflexed and the shank more vertical, their plantarflexors switched on
+  earlier (Ahn et al., J Sport Health Sci 3:102-112, 2014), with less tibialis anterior and more gastrocnemius
+  activity than rearfoot strikers in terminal swing (Yong, Silder & Delp, J Biomech 47:3593-3597, 2014); and no
+  published foot-IMU peak rate of forefoot strikers alone was found (the ~1500 deg/s below pools running up to
+  6.4 m/s);
 - a running foot is never still: it pitches (heel rise from 30 deg/s) and rolls (25 deg/s held) through its
   short foot flat, so the stance's calmest rate is ~28 deg/s (median over strides; 15-49 deg/s with the
   stride-to-stride variation of the stance rates). The value is bounded by measurements, not fitted to one: the
@@ -138,6 +149,7 @@ def run_tables(cadence: float, forefoot: bool) -> dict[str, dict]:
             "pitch_heel_strike_deg": 8.0 if forefoot else -15.0,
             "pitch_rate_heel_strike_dps": -200.0 if forefoot else 200.0,
             "pitch_toe_off_deg": 70.0, "pitch_rate_toe_off_dps": 1000.0, "pitch_accel_toe_off_dps2": 0.0,
+            "pitch_accel_to_swing_max_dps2": WALK_TOE_OFF_ACCEL * (cadence / WALK_FIT_CADENCE) ** 2,
             "swing_height_m": 0.15, "stride_length_sd_m": 0.04}
     impact = {"heel_strike_velocity_mps": [0.4, 0.0, -0.8], "heel_strike_duration_s": 0.015,
               "slap_rate_dps": 250.0, "slap_duration_s": 0.02}

@@ -12,7 +12,7 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
   heel-toe axis, which moves neither contact point) and the optional sustained roll and yaw (the yaw about a
   pivot on the heel-toe line; angles held through the push-off and returned over the swing).
 - Pitch: a Hermite through knots at heel strike, the start of the forefoot slap, foot flat (level, rising at the
-  heel-rise rate), heel off and toe off (:func:`pitch_profile`).
+  heel-rise rate), heel off, toe off and, if set, the swing's pitch maximum (:func:`pitch_profile`).
 - Swing [t_to, t_ic']: degree-9 Hermite of the heel point matching position and derivatives 1..4 at both ends,
   plus a C4 lift (height) and sideways excursion; yaw turns to the next stance with a C4 smoothstep.
 """
@@ -47,6 +47,17 @@ def heel_rise_rates(micro: MicroMotionParams, foot_flat: float, scale: float = 1
     return start, start + scale * micro.heel_rise_growth * foot_flat**2
 
 
+def swing_maximum(plan: StancePlan, gait: GaitParams) -> tuple[np.ndarray, np.ndarray]:
+    """Times (s) and pitches (rad), (n,) each, of the pitch maximum of every swing (the one after stance k's toe
+    off): where a steady deceleration at ``pitch_accel_to_swing_max`` (a < 0) stops the toe-off rate w,
+    ``w / |a|`` after toe off and ``w^2 / (2 |a|)`` above the stance's toe-off pitch; empty without that knot
+    (``pitch_accel_to_swing_max`` 0)."""
+    if not gait.pitch_accel_to_swing_max < 0:
+        return np.zeros(0), np.zeros(0)
+    stop_s = gait.pitch_rate_toe_off / -gait.pitch_accel_to_swing_max
+    return plan.t_to[:-1] + stop_s, plan.pitch_to[:-1] + 0.5 * gait.pitch_rate_toe_off * stop_s
+
+
 def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams,
                   micro: MicroMotionParams = MicroMotionParams()) -> smooth.Piecewise:
     """Foot pitch (rad) of a walk: a Hermite through knots (value and derivatives 1..4).
@@ -56,13 +67,19 @@ def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams,
     the foot-flat rate linearly); foot flat (level) and heel off, between which the pitch rate grows from the
     first to the second heel-rise rate of :func:`heel_rise_rates` with the square of the time since foot flat
     (a cubic pitch, given exactly by its derivatives at both knots); toe off (its drawn pitch,
-    ``pitch_rate_toe_off``, ``pitch_accel_toe_off``). Derivatives not named are zero. Standing
-    stances at the start and end are level and still. The slap turns the foot toward level: toes down after a
-    heel strike, heel down after a forefoot strike."""
+    ``pitch_rate_toe_off``, ``pitch_accel_toe_off``); with ``pitch_accel_to_swing_max`` (a < 0) set, the
+    swing's pitch maximum (:func:`swing_maximum`): zero rate, acceleration a and jerk a^2 / pitch_rate_toe_off,
+    so the acceleration returns to zero in the time it took to stop the toe-off rotation (a flat maximum would be
+    a still foot in mid-swing, which the stance detectors take for a stance). Derivatives not named are zero.
+    Standing stances at the start and end are level and still. The slap turns the foot toward level: toes down
+    after a heel strike, heel down after a forefoot strike."""
     n = plan.n_strides
     slap_rate = -impact.slap_rate if gait.forefoot_strike else impact.slap_rate
     strike = (gait.pitch_rate_heel_strike, gait.pitch_accel_heel_strike)
     toe_off = (gait.pitch_rate_toe_off, gait.pitch_accel_toe_off)
+    t_max, pitch_max = swing_maximum(plan, gait)
+    reversal = gait.pitch_accel_to_swing_max
+    turn = (reversal, reversal**2 / gait.pitch_rate_toe_off) if t_max.size else ()  # relaxes as fast as it stopped
     knots = [(0.0, 0.0, 0.0, 0.0, 0.0)]
     for k in range(n + 1):
         flat = plan.t_ho[k] - plan.t_ff[k]
@@ -78,6 +95,8 @@ def pitch_profile(plan: StancePlan, gait: GaitParams, impact: ImpactParams,
         if k < n:
             knots += [(plan.t_ho[k], (start + (end - start) / 3.0) * flat, end, jerk * flat, jerk),
                       (plan.t_to[k], plan.pitch_to[k], *toe_off, 0.0)]
+            if t_max.size:
+                knots.append((t_max[k], pitch_max[k], 0.0, *turn))
     knots.append((plan.t_end, 0.0, 0.0, 0.0, 0.0))
     kn = np.array(knots)
     keep = np.concatenate([[True], np.diff(kn[:, 0]) > 0])  # stance 0 starts at t = 0
