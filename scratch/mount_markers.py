@@ -8,28 +8,20 @@ rise of FM5 against the heel-toe line (mm), median and median absolute deviation
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
 from gaitsim.measured import mocap
-from gaitsim.measured.gaitmap import MOCAP_RATE_HZ, gaitmap_foot_pose, read_markers
-from gaitsim.stance.command import load_recordings
+from gaitsim.measured.gaitmap import MOCAP_RATE_HZ
 
-from .mount_rate import DATA, foot_flats
+from .mount_rate import filled_markers, foot_flats, gaitmap_feet
 
 STILL_DPS = 3.0  # deg/s, a still stretch's marker-body rate
 SIDES = {"FCC-TOE": ("FCC", "TOE"), "FCC-FM5": ("FCC", "FM5"), "TOE-FM5": ("TOE", "FM5")}
 
 
-def _filled(values: np.ndarray, t: np.ndarray) -> np.ndarray:
-    ok = ~np.isnan(values).any(axis=1)
-    return np.column_stack([np.interp(t, t[ok], values[ok, i]) for i in range(3)])
-
-
 def still_noise(t: np.ndarray, marker_set: dict, side: str, cutoff_hz: float) -> np.ndarray:
     """(3,) deg/s rms of the marker body's rate in its longest still stretch (0.2 s trimmed at both ends)."""
-    filled = {k: _filled(v, t) for k, v in marker_set.items()}
+    filled = {k: filled_markers(v, t) for k, v in marker_set.items()}
     _, rotation = mocap.marker_frame(filled["FCC"], filled["TOE"], filled["FM5"], side)
     rate = mocap.body_kinematics(np.zeros((len(t), 3)), rotation, MOCAP_RATE_HZ, cutoff_hz).rate_body
     still = np.degrees(np.linalg.norm(rate, axis=1)) < STILL_DPS
@@ -62,16 +54,9 @@ def core_changes(t: np.ndarray, marker_set: dict, flats: np.ndarray, clock_offse
 
 
 if __name__ == "__main__":
-    t_mocap, markers, _ = read_markers(DATA)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        recs = dict(load_recordings("gaitmap-healthy", DATA))
-    for side, rec in recs.items():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            pose = gaitmap_foot_pose(side, DATA)
+    for side, rec, pose, t_mocap, marker_set in gaitmap_feet():
         for cutoff in (6.0, 12.0):
             print(side, f"still marker-body rate rms at {cutoff:g} Hz (deg/s)",
-                  still_noise(t_mocap, markers[side], side, cutoff).round(2).tolist())
+                  still_noise(t_mocap, marker_set, side, cutoff).round(2).tolist())
         print(side, "core changes (median mm, MAD mm, strides)",
-              core_changes(t_mocap, markers[side], foot_flats(rec), pose.clock_offset))
+              core_changes(t_mocap, marker_set, foot_flats(rec), pose.clock_offset))

@@ -65,22 +65,30 @@ def summary(t, values, flats) -> dict:
             "core_trend_mad_dps2": np.degrees(np.median(np.abs(trend - np.median(trend, 0)), axis=0)).round(1).tolist()}
 
 
+def filled_markers(values: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(M, 3) m: a marker track with its dropouts (NaN rows) filled linearly, for filtering only."""
+    ok = ~np.isnan(values).any(axis=1)
+    return np.column_stack([np.interp(t, t[ok], values[ok, i]) for i in range(3)])
+
+
+def gaitmap_feet():
+    """Per gaitmap foot: (side, recording, Vicon pose on the IMU clock, mocap clock (M,) s, its three markers)."""
+    t_mocap, markers, _ = read_markers(DATA)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        recs = dict(load_recordings("gaitmap-healthy", DATA))
+        poses = {side: gaitmap_foot_pose(side, DATA) for side in recs}
+    for side, rec in recs.items():
+        yield side, rec, poses[side], t_mocap, markers[side]
+
+
 def gaitmap_rates(cutoff_hz: float = CUTOFF_HZ) -> dict:
     """Per gaitmap foot: :func:`summary` of the raw and the low-passed gyro, of the Vicon body's rate in the
     sensor frame and of their difference (out of foot), both low-passed at ``cutoff_hz``; and each stride's core
     mean of the Vicon rate and of the difference ("strides": (K, 3) rad/s each, in stride order)."""
     out = {}
-    t_mocap, markers, _ = read_markers(DATA)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        recs = dict(load_recordings("gaitmap-healthy", DATA))
-    for side, rec in recs.items():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            pose = gaitmap_foot_pose(side, DATA)
-        m = markers[side]
-        filled = {k: np.column_stack([np.interp(t_mocap, t_mocap[~np.isnan(v).any(1)], v[~np.isnan(v).any(1), i])
-                                      for i in range(3)]) for k, v in m.items()}
+    for side, rec, pose, t_mocap, marker_set in gaitmap_feet():
+        filled = {k: filled_markers(v, t_mocap) for k, v in marker_set.items()}
         _, rotation = mocap.marker_frame(filled["FCC"], filled["TOE"], filled["FM5"], side)
         kin = mocap.body_kinematics(np.zeros((len(t_mocap), 3)), rotation, MOCAP_RATE_HZ, cutoff_hz)
         t = np.asarray(rec.t, float)
