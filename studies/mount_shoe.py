@@ -1,7 +1,7 @@
 """Why a twin's foot flat is or is not marked at 1e4: the SHOE statistic's two terms inside the foot flats of a
-recording and of the stance twin with and without the mount turn (scratch.mount_turn).
+recording and of the stance twin with and without the mount turn (studies.mount_turn).
 
-``python3 -m scratch.mount_shoe``: per recording and twin, the share of foot-flat samples (u in 0.1..0.9) whose
+``python3 -m studies.mount_shoe``: per recording and twin, the share of foot-flat samples (u in 0.1..0.9) whose
 statistic is below each threshold 1e4..5e4, and the median over those samples of the gyro term (|w|^2 mean / sigma_g^2), the
 accelerometer term, and of |w| (deg/s) with its 10/90 % quantiles; the per-stride rms of each gyro axis about
 its linear trend over the core (u 0.2..0.8), median over strides, of the raw gyro and of the gyro low-passed

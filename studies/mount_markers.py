@@ -1,6 +1,6 @@
 """Is gaitmap's Vicon foot-flat roll motion, and is the sensor's z rate a twist of the marker triangle?
 
-``python3 -m scratch.mount_markers``: per foot, the marker body's angular rate (rms per axis, deg/s, low-passed
+``python3 -m studies.mount_markers``: per foot, the marker body's angular rate (rms per axis, deg/s, low-passed
 6 and 12 Hz) in the longest still stretch of the walk (its noise floor), and over the core of every foot flat
 (phases 0.2 to 0.8, the stance study's events on the mocap clock) the change of the three side lengths and the
 rise of FM5 against the heel-toe line (mm), median and median absolute deviation over strides.

@@ -1,7 +1,7 @@
-"""Tables of the mount-yaw study from ``scratch.mount_turn``'s JSON files: real +- sd / twin per variant, with
+"""Tables of the mount-yaw study from ``studies.mount_turn``'s JSON files: real +- sd / twin per variant, with
 issue 11's bounds (``x``: outside); the foot-flat |w| profile; the heading check.
 
-``python3 -m scratch.mount_table FILE.json [FILE.json ...]``
+``python3 -m studies.mount_table FILE.json [FILE.json ...]``
 """
 
 from __future__ import annotations

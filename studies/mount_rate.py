@@ -6,7 +6,7 @@ rates are read at foot-flat phases u and their core mean over u in [0.2, 0.8]; r
 the median absolute deviation over strides ("scatter"), the profile at u = 0.1..0.9 and the per-stride trend.
 Both the IMU gyro and the marker body are low-passed by the same zero-phase filter (``CUTOFF_HZ``).
 
-Run from the worktree root: ``python3 -m scratch.mount_rate [CUTOFF_HZ ...]`` (default 6 and 12 Hz).
+Run from the repository root: ``python3 -m studies.mount_rate [CUTOFF_HZ ...]`` (default 6 and 12 Hz).
 """
 
 from __future__ import annotations

@@ -13,15 +13,15 @@ The sensor model (BMI160 class) is then applied with the twin's sensor seed, and
 :func:`gaitsim.stance.sweep.sweep` against the twin's true site track, exactly like the committed twin.
 
 Variants (:func:`variants`): ``committed`` (no turn), on gaitmap the out-of-foot rate of
-:func:`scratch.mount_rate.gaitmap_rates` as measured (``full``: the median vector over strides; ``z``: its z
+:func:`studies.mount_rate.gaitmap_rates` as measured (``full``: the median vector over strides; ``z``: its z
 component; ``full_strides`` / ``z_strides``: each stride's own core mean, twin stride k taking real stride k mod K;
 ``z_signal``: the real sensor's z rate itself, less the Vicon foot's median core z, stride by stride at the same
 foot-flat phase, :func:`signal_turn_truth`, over the core u 0.1..0.9; ``z_signal_flat``: the same over u
 0.025..0.975, into the loading tail, where the Vicon's own z is larger than its core median); on ucr-fgo, which has no pose, ``z_gap``: the core z rate the real
 sensor reads and the committed twin's does not.
 
-Run from the worktree root: ``python3 -m scratch.mount_turn OUT.json [DATASET]`` (default gaitmap-healthy);
-``python3 -m scratch.mount_table OUT.json`` prints the tables.
+Run from the repository root: ``python3 -m studies.mount_turn OUT.json [DATASET]`` (default gaitmap-healthy);
+``python3 -m studies.mount_table OUT.json`` prints the tables.
 """
 
 from __future__ import annotations
@@ -196,7 +196,7 @@ def constant(rate_dps):
 
 
 def variants(dataset: str, label: str, rec, rates: dict) -> dict:
-    """The turns studied on one recording (module docstring); ``rates``: :func:`scratch.mount_rate.gaitmap_rates`."""
+    """The turns studied on one recording (module docstring); ``rates``: :func:`studies.mount_rate.gaitmap_rates`."""
     if dataset != "gaitmap-healthy":
         return {"z_gap": lambda truth, events, context: turn_truth(
             truth, events, np.radians([0.0, 0.0, context["real_core_dps"][2] - context["twin_core_dps"][2]]))}
