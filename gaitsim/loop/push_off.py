@@ -56,15 +56,16 @@ def _gravity_reaction(acc: np.ndarray, gyr: np.ndarray, ends: np.ndarray, first:
     (a vector fixed in the world seen from the body: du/dt = -w x u), (m, count, 3)."""
     quiet = max(1, int(round(QUIET_S * rate_hz)))
     start = ends + first
-    u = np.stack([acc[s - quiet:s].mean(0) for s in start])
+    u = acc[start[:, None] - quiet + np.arange(quiet)].mean(1)
+    angle = gyr[start[:, None] + np.arange(count)] / rate_hz  # (m, count, 3) rad, the body's turn over each sample
+    size = np.linalg.norm(angle, axis=-1, keepdims=True)
+    axis = np.divide(angle, size, out=np.zeros_like(angle), where=size > 0)
+    c, s = np.cos(size)[..., None], np.sin(size)[..., None]
+    turn = c * np.eye(3) - s * skew(axis) + (1.0 - c) * axis[..., :, None] * axis[..., None, :]  # by -angle (Rodrigues)
     out = np.empty((len(ends), count, 3))
     for k in range(count):
         out[:, k] = u
-        angle = gyr[start + k] / rate_hz  # rad, rotation of the body over one sample
-        size = np.linalg.norm(angle, axis=1, keepdims=True)
-        axis = np.divide(angle, size, out=np.zeros_like(angle), where=size > 0)
-        c, s = np.cos(size), np.sin(size)  # turn u by -angle about axis (Rodrigues)
-        u = u * c - np.cross(axis, u) * s + axis * np.sum(axis * u, axis=1, keepdims=True) * (1.0 - c)
+        u = (turn[:, k] @ u[..., None])[..., 0]
     return out
 
 
@@ -102,18 +103,27 @@ def _push_off(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarr
 def _normal_equations(on_span: np.ndarray, f: np.ndarray, rate: float, margin: int, taus_ms: np.ndarray):
     """Per stance and lag, the least-squares system of (r, b) with the rate, its derivative and u read ``taus_ms``
     (T,) later (linear interpolation between samples): D^T D (m, T, 6, 6), D^T y (m, T, 6), y^T y (m, T), and the
-    rates read (m, T, n, 3)."""
+    rates read (m, T, n, 3).
+
+    Every sample's three rows of D are [A, I] with A = S(dw/dt) + S(w)^2 = S(dw/dt) + w w^T - |w|^2 I, so D^T D
+    is [[sum A^T A, sum A^T], [sum A, n I]] and D^T y is [sum A^T y, sum y]."""
     m, n = f.shape[:2]
     read = margin + np.arange(n) + np.asarray(taus_ms, float)[:, None] / 1000.0 * rate  # (T, n)
     i = np.floor(read).astype(int)
     share = (read - i)[None, :, :, None]
     w, w_dot, u = np.split(on_span[:, i] * (1.0 - share) + on_span[:, i + 1] * share, 3, axis=-1)
     turn = skew(w_dot) + w[..., :, None] * w[..., None, :] - np.sum(w * w, axis=-1)[..., None, None] * np.eye(3)
-    design = np.concatenate([turn, np.broadcast_to(np.eye(3), turn.shape)], axis=-1)  # S(w)^2 = w w^T - |w|^2 I
-    design = design.reshape(m, len(read), 3 * n, 6)  # the three axes of every sample as rows
-    y = (f[:, None] - u).reshape(m, len(read), 3 * n)
-    turned = design.swapaxes(-1, -2)
-    return turned @ design, (turned @ y[..., None])[..., 0], np.sum(y * y, axis=-1), w
+    rows = turn.reshape(m, len(read), 3 * n, 3)  # the three axes of every sample as rows
+    y = f[:, None] - u
+    stacked = y.reshape(m, len(read), 3 * n)
+    summed = turn.sum(axis=2)
+    normal = np.empty((m, len(read), 6, 6))
+    normal[..., :3, :3] = rows.swapaxes(-1, -2) @ rows
+    normal[..., :3, 3:] = summed.swapaxes(-1, -2)
+    normal[..., 3:, :3] = summed
+    normal[..., 3:, 3:] = n * np.eye(3)
+    moment = np.concatenate([(rows.swapaxes(-1, -2) @ stacked[..., None])[..., 0], y.sum(axis=2)], axis=-1)
+    return normal, moment, np.sum(stacked * stacked, axis=-1), w
 
 
 def _solve(normal: np.ndarray, moment: np.ndarray) -> np.ndarray:
