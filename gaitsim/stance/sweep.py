@@ -158,6 +158,12 @@ class Windows:
     duration: np.ndarray
 
 
+def _runs(stances: DetectedStances) -> tuple[np.ndarray, np.ndarray]:
+    """The zero-velocity runs (R, 2) [start, end) of all stances in order, and the stance each belongs to (R,)."""
+    runs = np.concatenate(stances.runs) if len(stances) else np.empty((0, 2), int)
+    return runs, np.repeat(np.arange(len(stances)), [len(r) for r in stances.runs])
+
+
 def windows(t: np.ndarray, stationary: np.ndarray, track_t: np.ndarray, track_pos: np.ndarray) -> Windows:
     """Detected stances of zero-velocity flags ``stationary`` (N,) on the clock ``t`` (N,) s and the site
     track (t (M,) s, pos (M, 3) m) inside them."""
@@ -168,12 +174,11 @@ def windows(t: np.ndarray, stationary: np.ndarray, track_t: np.ndarray, track_po
     walking = np.zeros(len(stances), bool)
     walking[1:-1] = window[1:-1] <= MAX_STANCE_S
     forward = _forward(ref) if len(stances) > 1 else np.zeros((len(stances), 2))
-    displacement = np.zeros(len(stances))
-    duration = np.zeros(len(stances))
-    for s, runs in enumerate(stances.runs):
-        ends = _at(t[runs[:, 1] - 1], track_t, track_pos)[:, :2] - _at(t[runs[:, 0]], track_t, track_pos)[:, :2]
-        displacement[s] = float(np.sum(ends @ forward[s]))
-        duration[s] = float(np.sum(t[runs[:, 1] - 1] - t[runs[:, 0]]))
+    runs, owner = _runs(stances)
+    first, last = t[runs[:, 0]], t[runs[:, 1] - 1]
+    moved = _at(last, track_t, track_pos)[:, :2] - _at(first, track_t, track_pos)[:, :2]
+    displacement = np.bincount(owner, np.einsum("ij,ij->i", moved, forward[owner]), minlength=len(stances))
+    duration = np.bincount(owner, last - first, minlength=len(stances))
     return Windows(stances, middles, ref, walking, window, displacement, duration)
 
 
@@ -182,13 +187,14 @@ def track_pseudo_velocity(t: np.ndarray, track_t: np.ndarray, track_pos: np.ndar
     velocity over that run (end minus start position over its duration) in the stance's walking frame
     (forward along its stride, left, up); zero elsewhere."""
     out = np.zeros((len(t), 3))
-    forward = _forward(w.middle_pos)
-    for s, runs in enumerate(w.stances.runs):
-        u = forward[s]
-        for a, b in runs:
-            v = (_at(t[[b - 1]], track_t, track_pos) - _at(t[[a]], track_t, track_pos))[0] / (t[b - 1] - t[a])
-            if np.all(np.isfinite(v)):
-                out[a:b] = rotate_to_heading(v, u[0], u[1])
+    runs, owner = _runs(w.stances)
+    first, last = t[runs[:, 0]], t[runs[:, 1] - 1]
+    forward = _forward(w.middle_pos)[owner]
+    velocity = rotate_to_heading((_at(last, track_t, track_pos) - _at(first, track_t, track_pos))
+                                 / (last - first)[:, None], forward[:, 0], forward[:, 1])
+    for (a, b), v in zip(runs, velocity):
+        if np.all(np.isfinite(v)):
+            out[a:b] = v
     return out
 
 
