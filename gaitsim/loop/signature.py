@@ -150,27 +150,18 @@ def _stance_velocity(t: np.ndarray, pos_t: np.ndarray, pos: np.ndarray, strides:
     ok = np.all(np.isfinite(pos), axis=1)
     if ok.sum() < settings.MIN_TRACK_SAMPLES:
         return np.full(len(strides), math.nan)
-    pt, pp = pos_t[ok], pos[ok]
-    out = np.full(len(strides), math.nan)
-    for k, ((s0, s1), (c0, c1)) in enumerate(zip(strides, stances)):
-        t_mid = 0.5 * (t[c0] + t[c1 - 1])
-        t_next = t_mid + (t[s1] - t[s0])
-        if t_next > pt[-1] or t[c0] < pt[0]:
-            continue
-        here = resample(t_mid, pt, pp[:, :2])
-        there = resample(t_next, pt, pp[:, :2])
-        step = there - here
-        if np.hypot(*step) < settings.MIN_TRACK_STRIDE_M:
-            continue
-        forward = step / np.hypot(*step)
-        third = (t[c1 - 1] - t[c0]) / 3.0
-        ta, tb = t[c0] + third, t[c1 - 1] - third
-        if tb - ta <= 0:
-            continue
-        xa = resample(ta, pt, pp[:, :2])
-        xb = resample(tb, pt, pp[:, :2])
-        out[k] = float((xb - xa) @ forward / (tb - ta))
-    return out
+    pt, pp = pos_t[ok], pos[ok, :2]
+    (s0, s1), (c0, c1) = np.asarray(strides).T, np.asarray(stances).T
+    t_mid = 0.5 * (t[c0] + t[c1 - 1])
+    step = resample(t_mid + (t[s1] - t[s0]), pt, pp) - resample(t_mid, pt, pp)
+    length = np.hypot(step[:, 0], step[:, 1])
+    third = (t[c1 - 1] - t[c0]) / 3.0
+    ta, tb = t[c0] + third, t[c1 - 1] - third
+    valid = ((t_mid + (t[s1] - t[s0]) <= pt[-1]) & (t[c0] >= pt[0]) & (length >= settings.MIN_TRACK_STRIDE_M)
+             & (tb - ta > 0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        velocity = np.einsum("ij,ij->i", resample(tb, pt, pp) - resample(ta, pt, pp), step / length[:, None]) / (tb - ta)
+    return np.where(valid, velocity, math.nan)
 
 
 def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray | None = None,
