@@ -69,15 +69,16 @@ def stride_closure(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, level: np.nd
     StrideClosure with one row per stride.
     """
     rates = gyr if gyro_bias is None else np.asarray(gyr, float) - np.asarray(gyro_bias, float)
-    up = np.array([0.0, 0.0, 1.0])
-    velocity, tilt, angle = [], [], []
-    for (l0, l1), i0, (e0, e1), (r0, r1) in zip(level, start, end, read):
-        roll, pitch = tilt_from_specific_force(acc[l0:l1].mean(0))
-        run = integrate(t[i0:e1], acc[i0:e1], rates[i0:e1], quat.from_euler_zyx(0.0, pitch, roll), gravity=gravity)
-        velocity.append(run.vel[e0 - i0:e1 - i0].mean(0))
-        carried = quat.to_matrix(run.quat[(e0 + e1) // 2 - i0]).T @ up
-        measured = acc[r0:r1].mean(0)
-        measured = measured / np.linalg.norm(measured)
-        tilt.append(np.cross(carried, measured))
-        angle.append(np.arctan2(np.linalg.norm(tilt[-1]), np.dot(carried, measured)))
-    return StrideClosure(np.array(velocity).reshape(-1, 3), np.array(tilt).reshape(-1, 3), np.array(angle))
+    tilts = np.array([tilt_from_specific_force(acc[l0:l1].mean(0)) for l0, l1 in level]).reshape(-1, 2)
+    quat0 = quat.from_euler_zyx(0.0, tilts[:, 1], tilts[:, 0])
+    velocity, carried = np.empty((len(start), 3)), np.empty((len(start), 4))
+    for k, (i0, (e0, e1)) in enumerate(zip(start, end)):
+        run = integrate(t[i0:e1], acc[i0:e1], rates[i0:e1], quat0[k], gravity=gravity)
+        velocity[k] = run.vel[e0 - i0:e1 - i0].mean(0)
+        carried[k] = run.quat[(e0 + e1) // 2 - i0]
+    carried = quat.to_matrix(carried)[:, 2]  # the world's up in the sensor frame: the last row of body->world
+    measured = np.array([acc[r0:r1].mean(0) for r0, r1 in read]).reshape(-1, 3)
+    measured /= np.linalg.norm(measured, axis=1, keepdims=True)
+    tilt = np.cross(carried, measured)
+    angle = np.arctan2(np.linalg.norm(tilt, axis=1), np.einsum("ij,ij->i", carried, measured))
+    return StrideClosure(velocity, tilt, angle)
