@@ -121,21 +121,24 @@ def mean_se(samples) -> Scalar:
     return Scalar(float(np.mean(x)), se, x)
 
 
-def _band_share(x: np.ndarray, rate_hz: float, edge_hz: float) -> float:
-    """Share (%) of the variance of ``x`` above ``edge_hz``."""
-    power = np.abs(np.fft.rfft(x - x.mean())) ** 2
-    freq = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
+def _spectrum_of(x: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """(rfft of ``x`` less its mean, its frequencies in Hz)."""
+    return np.fft.rfft(x - x.mean()), np.fft.rfftfreq(len(x), 1.0 / rate_hz)
+
+
+def _band_share(spec: np.ndarray, freq: np.ndarray, edge_hz: float) -> float:
+    """Share (%) of the variance above ``edge_hz`` of a series with the spectrum ``spec`` at ``freq`` (Hz;
+    :func:`_spectrum_of`)."""
+    power = np.abs(spec) ** 2
     total = power[1:].sum()
     return float(100.0 * power[freq > edge_hz].sum() / total) if total > 0 else math.nan
 
 
-def _band_pass(x: np.ndarray, rate_hz: float, band: tuple) -> np.ndarray:
-    """Zero-phase FFT band pass of ``x`` (band in Hz, upper edge at most ``settings.BAND_TOP_SHARE`` times the
-    rate), mean removed."""
-    spec = np.fft.rfft(x - x.mean())
-    freq = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
-    spec[(freq < band[0]) | (freq > min(band[1], settings.BAND_TOP_SHARE * rate_hz))] = 0.0
-    return np.fft.irfft(spec, len(x))
+def _band_pass(spec: np.ndarray, freq: np.ndarray, n: int, rate_hz: float, band: tuple) -> np.ndarray:
+    """Zero-phase FFT band pass (band in Hz, upper edge at most ``settings.BAND_TOP_SHARE`` times the rate) of the
+    ``n`` samples with the spectrum ``spec`` at ``freq`` (:func:`_spectrum_of`: mean removed)."""
+    spec = np.where((freq < band[0]) | (freq > min(band[1], settings.BAND_TOP_SHARE * rate_hz)), 0.0, spec)
+    return np.fft.irfft(spec, n)
 
 
 def _swing_axis_yaw(gyr: np.ndarray) -> float:
@@ -231,11 +234,12 @@ def _stride_statistics(acc_norm: np.ndarray, gyr: np.ndarray, rate: float, strid
     the sample rate resolves their band."""
     s0, s1 = stride
     a = acc_norm[s0:s1]
+    spec, freq = _spectrum_of(a, rate)
     out = {"acc_peak": a.max(), "gyr_peak": np.degrees(np.linalg.norm(gyr[s0:s1], axis=1).max())}
     for edge, key in zip(settings.HF_EDGES_HZ, ("hf40", "hf80")):
-        out[key] = _band_share(a, rate, edge) if rate / 2 > settings.HF_NYQUIST_MARGIN * edge else math.nan
+        out[key] = _band_share(spec, freq, edge) if rate / 2 > settings.HF_NYQUIST_MARGIN * edge else math.nan
     if rate / 2 > settings.HF_NYQUIST_MARGIN * settings.ONSET_HF_EDGE_HZ:
-        high = _band_pass(a, rate, (settings.ONSET_HF_EDGE_HZ, np.inf))
+        high = _band_pass(spec, freq, len(a), rate, (settings.ONSET_HF_EDGE_HZ, np.inf))
         out["onset_hf"] = float(np.sqrt(np.mean(high[:max(2, int(settings.ONSET_WINDOW_S * rate))] ** 2)))
     out["swing_axis_yaw"] = _swing_axis_yaw(gyr[s0:s1])
     return out
