@@ -85,7 +85,7 @@ def test_in_window_velocity_of_a_creeping_still_foot_is_its_creep():
 
 def test_with_the_true_in_window_velocity_an_ideal_sensor_loses_nothing(default_walk):
     rec = default_walk
-    r = sweeps.run_threshold(rec, rec.truth.t, rec.truth.pos, 3e4)
+    r, = sweeps.run_thresholds(rec, rec.truth.t, rec.truth.pos, [3e4])
     assert r.underestimate_pct() > 0.05  # the foot's motion in the windows shortens the track ...
     # ... and only that: the run-mean pseudo-velocity removes most of it (what is left is the velocity's
     # variation inside each run)

@@ -203,28 +203,32 @@ def _steps(sol, w: Windows) -> np.ndarray:
     return np.linalg.norm(np.diff(est, axis=0), axis=1)
 
 
-def run_threshold(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, threshold: float,
-                  method: str = "auto", track_pseudo: bool = True) -> ThresholdResult:
-    """Navigate ``rec`` at ``threshold`` (mechanisation ``method``) and measure it against the site track
-    (t (N,) s, pos (N, 3) m); without ``track_pseudo`` the second navigation (the track's velocity as the
-    stance pseudo-measurement) is skipped and ``step_estimate_track_pseudo`` is NaN."""
+def run_thresholds(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds, method: str = "auto",
+                   track_pseudo: bool = True) -> list[ThresholdResult]:
+    """Navigate ``rec`` at each of the ``thresholds`` (mechanisation ``method``; the recording's input checks run
+    once for all, :func:`nav.pipeline.navigate_variants`) and measure each against the site track (t (N,) s,
+    pos (N, 3) m); without ``track_pseudo`` the second navigation (the track's velocity as the stance
+    pseudo-measurement) is skipped and ``step_estimate_track_pseudo`` is NaN."""
     t = np.asarray(rec.t, float)
-    sol = pipeline.navigate(rec, nav_options(threshold, method=method))
-    stationary = np.asarray(sol.stationary, bool).copy()
-    stationary[:sol.start] = False
-    w = windows(t, stationary, track_t, track_pos)
-    steps = _steps(sol, w)
+    solutions = pipeline.navigate_variants(rec, [nav_options(th, method=method) for th in thresholds])
+    found = []
+    for sol in solutions:
+        stationary = np.asarray(sol.stationary, bool).copy()
+        stationary[:sol.start] = False
+        found.append(windows(t, stationary, track_t, track_pos))
+    steps = [_steps(sol, w) for sol, w in zip(solutions, found)]
     if track_pseudo:
-        pseudo = track_pseudo_velocity(t, track_t, track_pos, w)
-        steps_pseudo = _steps(pipeline.navigate(rec, nav_options(threshold, pseudo, method)), w)
+        pseudo = pipeline.navigate_variants(rec, [nav_options(th, track_pseudo_velocity(t, track_t, track_pos, w), method)
+                                                  for th, w in zip(thresholds, found)])
+        steps_pseudo = [_steps(sol, w) for sol, w in zip(pseudo, found)]
     else:
-        steps_pseudo = np.full_like(steps, np.nan)
-    return ThresholdResult(
-        threshold=float(threshold), step_start=w.stance_time[:-1], step_estimate=steps,
+        steps_pseudo = [np.full_like(s, np.nan) for s in steps]
+    return [ThresholdResult(
+        threshold=float(th), step_start=w.stance_time[:-1], step_estimate=s,
         step_track=np.linalg.norm(np.diff(w.middle_pos[:, :2], axis=0), axis=1),
-        step_estimate_track_pseudo=steps_pseudo,
+        step_estimate_track_pseudo=s_pseudo,
         walking=w.walking, stance_time=w.stance_time, window=w.window, window_displacement=w.displacement,
-        window_duration=w.duration)
+        window_duration=w.duration) for th, w, s, s_pseudo in zip(thresholds, found, steps, steps_pseudo)]
 
 
 @dataclass
@@ -294,7 +298,7 @@ def sweep(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, thresholds
         raise ValueError(f"sweep: quantities {unknown} unknown; allowed: {', '.join(QUANTITIES)}")
     thresholds = np.asarray(sorted(thresholds), float)
     pseudo = any(name in TRACK_PSEUDO_QUANTITIES for name in quantities)
-    results = [run_threshold(rec, track_t, track_pos, th, method, pseudo) for th in thresholds]
+    results = run_thresholds(rec, track_t, track_pos, thresholds, method, pseudo)
     edges = results[-1].stance_time[BLOCK_STRIDES::BLOCK_STRIDES]
     blocks = len(edges) + 1
 
