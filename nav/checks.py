@@ -7,14 +7,16 @@ samples, repeated or decreasing timestamps, and -- unless the caller allows them
 :data:`ALLOWABLE`; ``gaitsim nav --allow NAME``) -- a sample rate outside 20 Hz..5 kHz (time in ms or us:
 read the recording with ``time_unit``, ``gaitsim nav --time-unit ms``), an accelerometer that reads ~1 at rest
 (units of g), a gyro whose rates exceed any walking range on more than a handful of samples (units of deg/s),
-and strides over which the gyro's attitude disagrees with the accelerometer's (a wrong gyro scale or unit, a
-flipped accelerometer; strides holding clipped samples are not judged, since saturation alone spoils them). No
-stance found by the detector is an error too.
+and strides over which the gyro's attitude disagrees with the accelerometer's where another gyro scale, or the
+gyro's sign, closes them at least :data:`CLOSURE_SCALE_GAIN` times better (a wrong gyro scale or unit, a mirrored
+frame; strides holding clipped samples are not judged, since saturation alone spoils them). No stance found by
+the detector is an error too.
 Warnings (returned in :class:`CheckReport` with counts and issued with ``warnings.warn``): irregular sample
 intervals, gaps longer than :data:`GAP_PERIODS` sample periods, no rest at the start, static specific force far
 from gravity or not along +z, a static gyro offset too large for rad/s, a handful of gyro samples above any
 walking rate (glitches), flat tops at a column's extreme (clipping, at any range; with the strides the closure
-check left out for it).
+check left out for it), strides that end fast whatever the gyro's scale (a foot not still at its rests, as in
+running, or an accelerometer error).
 """
 
 from __future__ import annotations
@@ -47,6 +49,12 @@ STRIDE_RANGE_S = (0.2, 3.0)  # s between two rests that count as one stride for 
 MAX_CLOSURE_SPEED = 1.0  # m/s, median speed a stride ends with (gyro-carried attitude) that refuses gyro against
 # acc: clean recordings end at 0.1-0.46 m/s (simulated, gaitmap, UCR, x-io), a gyro scaled x2 at 1.5-7 m/s
 MIN_CLOSURE_STRIDES = 3  # strides needed before the closure check judges
+# gyro scales tried on strides that end fast: refused only when one of these closes the strides CLOSURE_SCALE_GAIN
+# times better than the recording's own gyro (a foot that is not still at its rests, e.g. a running foot, or an
+# accelerometer error ends strides fast at every scale, its own closing best). -1: a mirrored frame (one axis
+# flipped, or two swapped, on both sensors) turns the gyro's rotations the other way against the accelerometer
+GYRO_SCALES_TRIED = (-1.0, 1 / 4, 1 / 3, 1 / 2, 2 / 3, 3 / 2, 2.0, 3.0, 4.0)
+CLOSURE_SCALE_GAIN = 2.0
 ALLOWABLE = ("rate", "units", "closure")  # refusals a caller may turn into warnings by name
 
 
@@ -301,12 +309,35 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
         report.counts.update(closure_speed_median_mps=median, closure_tilt_median_deg=math.degrees(np.median(tilt)),
                              closure_strides_off=off)
         if median > MAX_CLOSURE_SPEED:
-            report.refuse("closure" in allow, f"{name}: gyro against accelerometer: carried by the gyro from one rest "
-                          f"to the next, {off} of {len(speed)} strides end faster than {MAX_CLOSURE_SPEED:g} m/s "
-                          f"(median {median:.3g} m/s, tilt off by {math.degrees(np.median(tilt)):.1f} deg) where the "
-                          "foot is still: a wrong gyro scale or unit against the accelerometer; pass "
-                          "allow=('closure',) (gaitsim nav --allow closure) to navigate anyway")
+            scale, scaled = best_gyro_scale(t, acc, gyr, gravity, rests, tops.any(axis=1))
+            report.counts.update(closure_best_gyro_scale=scale, closure_speed_median_at_best_scale_mps=scaled)
+            fast = (f"{name}: gyro against accelerometer: carried by the gyro from one rest to the next, {off} of "
+                    f"{len(speed)} strides end faster than {MAX_CLOSURE_SPEED:g} m/s (median {median:.3g} m/s, tilt "
+                    f"off by {math.degrees(np.median(tilt)):.1f} deg) where the foot should be still")
+            cause = ("a mirrored sensor frame (an axis flipped or two swapped)" if scale < 0
+                     else "a wrong gyro scale or unit against the accelerometer")
+            if scale != 1.0 and scaled * CLOSURE_SCALE_GAIN <= median:
+                report.refuse("closure" in allow, f"{fast}; the gyro times {scale:.3g} closes them at a median "
+                              f"{scaled:.3g} m/s: {cause}; pass allow=('closure',) (gaitsim nav --allow closure) "
+                              "to navigate anyway")
+            else:
+                report.warn(f"{fast}; no gyro scale of {', '.join(f'{x:.3g}' for x in GYRO_SCALES_TRIED)} closes "
+                            f"them {CLOSURE_SCALE_GAIN:g} times better (best: x{scale:.3g}, {scaled:.3g} m/s), so "
+                            "it is not the gyro's scale or frame: a foot that is not still at its rests (running) "
+                            "or an accelerometer error")
     return report
+
+
+def best_gyro_scale(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
+                    rests: tuple[np.ndarray, np.ndarray], spoiled: np.ndarray) -> tuple[float, float]:
+    """The gyro scale, 1 or one of :data:`GYRO_SCALES_TRIED`, whose median stride-closure speed (m/s,
+    :func:`closure_between_rests` over the same ``rests``, leaving out strides with ``spoiled`` samples) is least,
+    and that median."""
+    scales = (1.0, *GYRO_SCALES_TRIED)
+    medians = [float(np.median(closure_between_rests(t, acc, gyr * scale, gravity, rests, spoiled)[0]))
+               for scale in scales]
+    best = int(np.argmin(medians))
+    return scales[best], medians[best]
 
 
 def check_stance_found(stationary: np.ndarray, detector_description: str, min_statistic: float = math.nan) -> None:

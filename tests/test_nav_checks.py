@@ -123,3 +123,30 @@ def test_one_axis_saturated_at_2000_deg_per_s_is_not_deg_per_s():
     assert report.counts["samples_above_walking_rate"] == 0
     with pytest.raises(RecordingError, match="reports deg/s"):
         check_recording(variant(rec, gyr=np.degrees(rec.gyr)))
+
+
+def test_a_mirrored_frame_is_refused_and_named():
+    rec = synthetic_walk(strides=6)
+    flip = np.diag([1.0, -1.0, 1.0])  # the y axis of both sensors reversed: a left-handed frame
+    with pytest.raises(RecordingError, match="times -1 closes them.*mirrored sensor frame"):
+        check_recording(variant(rec, acc=rec.acc @ flip, gyr=rec.gyr @ flip))
+    with pytest.raises(RecordingError, match="times 0.333 closes them.*wrong gyro scale"):
+        check_recording(variant(rec, gyr=rec.gyr * 3.0))
+
+
+def test_strides_that_end_fast_at_every_gyro_scale_are_flagged_not_refused():
+    """An accelerometer error, not the gyro: a kick of 1.5 m/s along the axis the foot turns about (y), mid-swing
+    (numpy only), ends every stride fast whatever the gyro's scale, and the recording's own scale closes best (as
+    on a simulated consumer sensor's run, whose foot is never still at its rests: README, the input checks)."""
+    rec = synthetic_walk(strides=6)
+    acc = rec.acc.copy()
+    swing = np.flatnonzero(~rec.truth.stance)
+    starts = swing[np.flatnonzero(np.diff(swing, prepend=-2) > 1)]
+    rate = 1.0 / np.median(np.diff(rec.t))
+    for s in starts:
+        middle = slice(s + int(0.15 * rate), s + int(0.35 * rate))  # 0.2 s at 7.5 m/s^2
+        acc[middle, 1] += 7.5
+    with pytest.warns(UserWarning, match="not the gyro's scale or frame"):
+        report = check_recording(variant(rec, acc=acc))
+    assert report.counts["closure_speed_median_mps"] > 1.0
+    assert report.counts["closure_best_gyro_scale"] == 1.0
