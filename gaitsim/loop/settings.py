@@ -61,7 +61,9 @@ MIN_ACC_SD_MPS2 = 1e-5  # m/s^2, least quiet-window accelerometer spread (a twin
 MIN_GYR_SD_RAD_S = 1e-6  # rad/s, least quiet-window gyro spread
 SWING_HEIGHT_BOUNDS_M = (0.01, 0.3)  # m, range of the twin's swing height after matching the clearance
 NAV_OPTIONS = pipeline.NavOptions(method="rk4")  # both sides are navigated from their IMU samples
-TRUTH_CACHE_SIZE = 8  # simulated walks (ideal sensor) kept per loop run; effects on the sensor re-use them
+TRUTH_CACHE_MB = 64.0  # MB of simulated walks (ideal sensor) kept per loop process, the ones used last (at least
+# two): effects on the sensor re-use them, and a round's twin outlives the ~15 walks of one effect's search
+# (a 40 s twin at 205 Hz is 1.4 MB)
 
 # -- gait shape fit (gaitsim.loop.gait_fit) ------------------------------------------------------------------
 PROFILE_POINTS = 128  # phase grid of the pitch profiles

@@ -90,11 +90,12 @@ class Twin:
 
 
 class TwinSimulator:
-    """Simulates twins for one loop run, keeping the last ``size`` ideal-sensor walks keyed on what they depend on
-    (walk, mount, rate, gravity, seed): an effect that only changes the sensor costs one sensor-model pass."""
+    """Simulates twins for one loop run, keeping the ideal-sensor walks used last, up to ``budget_mb`` MB of their
+    truth (at least two), keyed on what they depend on (walk, mount, rate, gravity, seed): an effect that only
+    changes the sensor costs one sensor-model pass, and the twin every round returns to stays kept."""
 
-    def __init__(self, size: int = settings.TRUTH_CACHE_SIZE):
-        self.size = size
+    def __init__(self, budget_mb: float = settings.TRUTH_CACHE_MB):
+        self.budget_bytes = budget_mb * 1e6
         self._walks: dict[tuple, tuple[Truth, Events, dict]] = {}
 
     def __call__(self, twin: Twin, seed: int | None = None) -> Recording:
@@ -102,13 +103,19 @@ class TwinSimulator:
         seed = twin.seed if seed is None else seed
         s = twin.scenario
         key = (s.walk, s.mount, s.rate_hz, s.gravity, seed)
-        walk = self._walks.get(key)
+        walk = self._walks.pop(key, None)
         if walk is None:
             walk = simulate_world(s, seed)
-            if len(self._walks) >= self.size:
-                self._walks.pop(next(iter(self._walks)))
-            self._walks[key] = walk
+            size = _truth_bytes(walk[0])
+            while len(self._walks) >= 2 and (len(self._walks) + 1) * size > self.budget_bytes:
+                self._walks.pop(next(iter(self._walks)))  # the one used longest ago
+        self._walks[key] = walk
         return sense(*walk, s.sensor, seed)
+
+
+def _truth_bytes(truth: Truth) -> int:
+    """Bytes held by the arrays of ``truth``."""
+    return sum(value.nbytes for value in vars(truth).values() if isinstance(value, np.ndarray))
 
 
 def match_noise(twin: Twin, simulate: TwinSimulator) -> Twin:
