@@ -16,9 +16,9 @@ measured constant out-of-foot z turn of :mod:`studies.mount_turn`'s ``z`` varian
 1 as a rotation of the foot about the contact the Vicon wobble gives, :func:`foot_wobble_truth`: the site moves
 by w x r). Swept like
 :mod:`studies.mount_turn` (bootstrap 400); ``python3 -m studies.mount_table OUT.json`` prints the tables and
-``python3 -m studies.stance_wobble --shares`` per recording and twin the foot-flat shares below each gate, |w|'s
-10/50/90 % quantiles, and the wobble re-measured by :mod:`studies.wobble_spectrum` (foot-frame rms, the site
-velocity's rms, f50, f90, envelope).
+``python3 -m studies.stance_wobble --shares`` a table: per recording and twin the foot-flat shares below each
+gate, abs(w)'s 10/50/90 % quantiles, and the wobble re-measured by :mod:`studies.wobble_spectrum` (foot-frame
+rms, the site velocity's rms, f50, f90).
 
 ``python3 -m studies.stance_wobble OUT.json [DATASET]`` from the repository root (default gaitmap-healthy).
 """
@@ -149,30 +149,33 @@ def measured_levers() -> dict:
 
 
 def shares(dataset: str) -> None:
-    """Print, per recording and twin, the foot-flat shares below each gate and the wobble re-measured."""
+    """Print, per recording and twin, a table row: the foot-flat shares (%) below each gate, abs(w)'s 10/50/90 %
+    quantiles (deg/s) and the wobble re-measured (foot-frame rms deg/s, site-velocity rms mm/s, f50, f90 Hz)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         recs = load_recordings(dataset, DATA)
         rates = gaitmap_rates() if dataset == "gaitmap-healthy" else {}
         levers = measured_levers() if dataset == "gaitmap-healthy" else {}
     for label, rec in recs:
-        terms = shoe_terms(rec)
-        m = measure(rec, rec.reference.t, rec.reference.pos) if SITES[dataset][1] else measure(rec)
-        print(dataset, label, "real", terms["below"], terms["w_p10_50_90"], m["foot"]["rms_dps"],
-              m.get("site_velocity_rms_mmps"))
         scenario, truth, events, meta, _ = committed_twin(dataset, label, rec)
+        twins = {"real": rec}
         for name, turn in {"committed": lambda truth, events, context: (truth, None),
                            **variants(dataset, label, rec, rates, levers)}.items():
-            twin = sense(turn(truth, events, {})[0], events, meta, scenario.sensor, TWIN_SEED)
-            terms = shoe_terms(twin)
-            m = measure(twin, twin.truth.t, twin.truth.pos)
-            print(dataset, label, name, terms["below"], terms["w_p10_50_90"], m["foot"]["rms_dps"],
-                  m["site_velocity_rms_mmps"], m["foot"]["f50_hz"], m["foot"]["f90_hz"],
-                  np.round(m["foot"]["envelope_dps"], 1).tolist())
+            twins[name] = sense(turn(truth, events, {})[0], events, meta, scenario.sensor, TWIN_SEED)
+        for name, r in twins.items():
+            terms = shoe_terms(r)
+            track = (r.reference.t, r.reference.pos) if name == "real" else (r.truth.t, r.truth.pos)
+            m = measure(r, *track) if name != "real" or SITES[dataset][1] else measure(r)
+            cells = ["/".join(f"{100 * b:.0f}" for b in terms["below"]), "/".join(f"{q:.1f}" for q in terms["w_p10_50_90"]),
+                     m["foot"]["rms_dps"], m.get("site_velocity_rms_mmps", "-"),
+                     [round(f, 1) for f in m["foot"]["f50_hz"]], [round(f, 1) for f in m["foot"]["f90_hz"]]]
+            print(f"| {dataset}/{label} | {name} | " + " | ".join(str(c) for c in cells) + " |")
 
 
 if __name__ == "__main__":
     if sys.argv[1] == "--shares":
+        print("| recording | twin | below gates 1e4..5e4 (%) | abs(w) p10/50/90 (deg/s) | wobble rms x/y/z (deg/s) "
+              "| site velocity wobble (mm/s) | f50 (Hz) | f90 (Hz) |\n" + "|---" * 8 + "|")
         for ds in sys.argv[2:] or ("gaitmap-healthy", "ucr-fgo"):
             shares(ds)
         sys.exit(0)
