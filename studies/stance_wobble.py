@@ -17,7 +17,8 @@ measured constant out-of-foot z turn of :mod:`studies.mount_turn`'s ``z`` varian
 by w x r). Swept like
 :mod:`studies.mount_turn` (bootstrap 400); ``python3 -m studies.mount_table OUT.json`` prints the tables and
 ``python3 -m studies.stance_wobble --shares`` a table: per recording and twin the foot-flat shares below each
-gate, abs(w)'s 10/50/90 % quantiles, and the wobble re-measured by :mod:`studies.wobble_spectrum` (foot-frame
+gate, abs(w)'s 10/50/90 % quantiles, the SHOE statistic's accelerometer term (median, 90 % quantile) over the same
+samples, and the wobble re-measured by :mod:`studies.wobble_spectrum` (foot-frame
 rms, the site velocity's rms, f50, f90).
 
 ``python3 -m studies.stance_wobble OUT.json [DATASET]`` from the repository root (default gaitmap-healthy).
@@ -150,7 +151,7 @@ def measured_levers() -> dict:
 
 def shares(dataset: str) -> None:
     """Print, per recording and twin, a table row: the foot-flat shares (%) below each gate, abs(w)'s 10/50/90 %
-    quantiles (deg/s) and the wobble re-measured (foot-frame rms deg/s, site-velocity rms mm/s, f50, f90 Hz)."""
+    quantiles (deg/s), the SHOE accelerometer term's median and 90 % quantile, and the wobble re-measured (foot-frame rms deg/s, site-velocity rms mm/s, f50, f90 Hz)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         recs = load_recordings(dataset, DATA)
@@ -167,6 +168,7 @@ def shares(dataset: str) -> None:
             track = (r.reference.t, r.reference.pos) if name == "real" else (r.truth.t, r.truth.pos)
             m = measure(r, *track) if name != "real" or SITES[dataset][1] else measure(r)
             cells = ["/".join(f"{100 * b:.0f}" for b in terms["below"]), "/".join(f"{q:.1f}" for q in terms["w_p10_50_90"]),
+                     f"{terms['acc_term']:.0f}/{terms['acc_term_p90']:.0f}",
                      m["foot"]["rms_dps"], m.get("site_velocity_rms_mmps", "-"),
                      [round(f, 1) for f in m["foot"]["f50_hz"]], [round(f, 1) for f in m["foot"]["f90_hz"]]]
             print(f"| {dataset}/{label} | {name} | " + " | ".join(str(c) for c in cells) + " |")
@@ -174,8 +176,9 @@ def shares(dataset: str) -> None:
 
 if __name__ == "__main__":
     if sys.argv[1] == "--shares":
-        print("| recording | twin | below gates 1e4..5e4 (%) | abs(w) p10/50/90 (deg/s) | wobble rms x/y/z (deg/s) "
-              "| site velocity wobble (mm/s) | f50 (Hz) | f90 (Hz) |\n" + "|---" * 8 + "|")
+        print("| recording | twin | below gates 1e4..5e4 (%) | abs(w) p10/50/90 (deg/s) | SHOE accelerometer term "
+              "median/p90 | wobble rms x/y/z (deg/s) "
+              "| site velocity wobble (mm/s) | f50 (Hz) | f90 (Hz) |\n" + "|---" * 9 + "|")
         for ds in sys.argv[2:] or ("gaitmap-healthy", "ucr-fgo"):
             shares(ds)
         sys.exit(0)
