@@ -1,27 +1,30 @@
-"""Steps 2-3 of the wobble study: the stance study's twin with a synthetic foot-flat rate wobble of its sensor.
+"""Steps 2-3 of the wobble study: the stance study's twin with a synthetic foot-flat rate wobble.
 
 The wobble is what :mod:`studies.wobble_spectrum` measures on the same recording, in the foot-flat frame (the
 twin's sensor axes are its foot axes): per axis, Gaussian noise (seeded) shaped by the measured PSD shape
 (:func:`shaped_noise`), times the measured rms envelope through the foot flat (ten phase bins, interpolated
 between bin centres, held to the ends), times a taper that takes it to zero over the first and last ``EDGE`` of
-each foot flat (smoothstep). The foot flats are the committed twin's detected ones (the recipe the envelope was
-measured with on the recording: the labelled heel off lies 34-59 ms before the detected one). It is added as a rotation of the sensor about its own centre
-(:func:`studies.mount_turn.apply_turn`: gyro = C^T w_foot + w_m, accelerometer = C^T f_foot, site unchanged);
-the angle reached over the foot flat returns over the following swing (:func:`studies.mount_turn.swing_return`,
-scaled so that the trapezoid integral of the sampled rate, the angle the twin is turned by, is zero again at the
-swing's end).
+each foot flat (smoothstep). The foot flats are the committed twin's detected ones, the recipe the envelope was
+measured with on the recording (the twin's labelled heel off lies 34-59 ms before its detected one). The angle
+reached over a foot flat returns over the following swing (:func:`studies.mount_turn.swing_return`, scaled so that
+the trapezoid integral of the sampled rate, the angle the twin is turned by, is zero again at the swing's end).
 
-Variants: ``committed``; ``wobble_s1..3`` (noise seeds 1-3); on gaitmap ``wobble_s1_z`` (seed 1 plus the
-measured constant out-of-foot z turn of :mod:`studies.mount_turn`'s ``z`` variant) and ``foot_wobble_s1`` (seed
-1 as a rotation of the foot about the contact the Vicon wobble gives, :func:`foot_wobble_truth`: the site moves
-by w x r). Swept like
-:mod:`studies.mount_turn` (bootstrap 400); ``python3 -m studies.mount_table OUT.json`` prints the tables and
-``python3 -m studies.stance_wobble --shares`` a table: per recording and twin the foot-flat shares below each
-gate, abs(w)'s 10/50/90 % quantiles, the SHOE statistic's accelerometer term (median, 90 % quantile) over the same
-samples, and the wobble re-measured by :mod:`studies.wobble_spectrum` (foot-frame
+Variants:
+
+- ``committed``: no wobble;
+- ``wobble_s1..3`` (noise seeds 1-3): a rotation of the sensor about its own centre
+  (:func:`studies.mount_turn.apply_turn`: gyro = C^T w_foot + w_m, accelerometer = C^T f_foot, site unchanged);
+- on gaitmap, ``wobble_s1_z``: seed 1 plus the measured constant out-of-foot z turn (:mod:`studies.mount_turn`'s
+  ``z`` variant);
+- on gaitmap, ``foot_wobble_s1``: seed 1 as a rotation of the foot about the contact the Vicon wobble gives
+  (:func:`foot_wobble_truth`: the site moves by w x r).
+
+``python3 -m studies.stance_wobble OUT.json [DATASET]`` from the repository root (default gaitmap-healthy) sweeps
+them like :mod:`studies.mount_turn` (bootstrap 400); ``python3 -m studies.mount_table OUT.json`` prints the
+tables. ``python3 -m studies.stance_wobble --shares [DATASET ...]`` prints a table: per recording and twin the
+foot-flat shares below each gate, abs(w)'s 10/50/90 % quantiles, the SHOE statistic's accelerometer term (median,
+90 % quantile) over the same samples, and the wobble re-measured by :mod:`studies.wobble_spectrum` (foot-frame
 rms, the site velocity's rms, f50, f90).
-
-``python3 -m studies.stance_wobble OUT.json [DATASET]`` from the repository root (default gaitmap-healthy).
 """
 
 from __future__ import annotations
