@@ -154,7 +154,8 @@ def measured_levers() -> dict:
 
 def shares(dataset: str) -> None:
     """Print, per recording and twin, a table row: the foot-flat shares (%) below each gate, abs(w)'s 10/50/90 %
-    quantiles (deg/s), the SHOE accelerometer term's median and 90 % quantile, and the wobble re-measured (foot-frame rms deg/s, site-velocity rms mm/s, f50, f90 Hz)."""
+    quantiles (deg/s), the SHOE accelerometer term's median and 90 % quantile, and the wobble re-measured
+    (foot-frame rms deg/s, site-velocity rms mm/s, f50, f90 Hz)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         recs = load_recordings(dataset, DATA)
@@ -170,7 +171,8 @@ def shares(dataset: str) -> None:
             terms = shoe_terms(r)
             track = (r.reference.t, r.reference.pos) if name == "real" else (r.truth.t, r.truth.pos)
             m = measure(r, *track) if name != "real" or SITES[dataset][1] else measure(r)
-            cells = ["/".join(f"{100 * b:.0f}" for b in terms["below"]), "/".join(f"{q:.1f}" for q in terms["w_p10_50_90"]),
+            cells = ["/".join(f"{100 * b:.0f}" for b in terms["below"]),
+                     "/".join(f"{q:.1f}" for q in terms["w_p10_50_90"]),
                      f"{terms['acc_term']:.0f}/{terms['acc_term_p90']:.0f}",
                      m["foot"]["rms_dps"], m.get("site_velocity_rms_mmps", "-"),
                      [round(f, 1) for f in m["foot"]["f50_hz"]], [round(f, 1) for f in m["foot"]["f90_hz"]]]

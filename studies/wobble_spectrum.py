@@ -105,7 +105,8 @@ def describe(t: np.ndarray, gyr: np.ndarray, flats: np.ndarray, rate_hz: float) 
     strides = residuals(t, gyr, flats)
     freq, shape = psd(strides, rate_hz)
     return {"strides": len(strides), "rms_dps": np.degrees(pooled_rms(strides, *CORE)).round(2).tolist(),
-            "envelope_dps": np.degrees([pooled_rms(strides, a, b) for a, b in zip(BINS[:-1], BINS[1:])]).round(2).tolist(),
+            "envelope_dps": np.degrees([pooled_rms(strides, a, b)
+                                        for a, b in zip(BINS[:-1], BINS[1:])]).round(2).tolist(),
             "f50_hz": band(freq, shape, 0.5), "f90_hz": band(freq, shape, 0.9),
             "psd_freq_hz": freq.tolist(), "psd": shape.tolist()}
 
@@ -133,7 +134,8 @@ def measure(rec, track_t: np.ndarray | None = None, track_pos: np.ndarray | None
 
 def site_velocity_at_rest(t: np.ndarray, gyr: np.ndarray, track_t: np.ndarray, track_pos: np.ndarray) -> list:
     """mm/s per world axis: rms of the reference site velocity about its mean in the recording's (clock ``t``
-    (N,) s, gyro ``gyr`` (N, 3) rad/s) longest stretch with abs(w) below ``REST_DPS`` (0.05 s trimmed at both ends), the track's noise floor."""
+    (N,) s, gyro ``gyr`` (N, 3) rad/s) longest stretch with abs(w) below ``REST_DPS`` (0.05 s trimmed at both
+    ends): the track's noise floor."""
     velocity = site_velocity(track_t, track_pos)
     still = np.interp(track_t, t, np.degrees(np.linalg.norm(gyr, axis=1))) < REST_DPS
     edges = np.flatnonzero(np.diff(np.r_[0, still.astype(int), 0]))
@@ -173,7 +175,8 @@ def contact_lever(rec, pose, vicon: np.ndarray) -> dict:
             for x in (vicon[:n], velocity)]
     lever = np.linalg.lstsq(_skew(core[0]).reshape(-1, 3), core[1].reshape(-1), rcond=None)[0]
     explained = np.einsum("nij,j->ni", _skew(core[0]), lever)
-    return {"lever_sensor_m": lever.round(3).tolist(), "lever_marker_m": (pose.mount_rotation @ lever).round(3).tolist(),
+    return {"lever_sensor_m": lever.round(3).tolist(),
+            "lever_marker_m": (pose.mount_rotation @ lever).round(3).tolist(),
             "site_velocity_rms_mmps": (1e3 * np.sqrt(np.mean(core[1] ** 2, 0))).round(1).tolist(),
             "explained_rms_mmps": (1e3 * np.sqrt(np.mean(explained ** 2, 0))).round(1).tolist(),
             "left_over_rms_mmps": (1e3 * np.sqrt(np.mean((core[1] - explained) ** 2, 0))).round(1).tolist()}
@@ -208,7 +211,8 @@ def main() -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for side, rec, pose, t_mocap, marker_set in gaitmap_feet():
-            result[f"gaitmap-healthy/{side}"] = {**measure(rec, rec.reference.t, rec.reference.pos), "vicon": vicon_check(side, rec, pose, t_mocap, marker_set)}
+            result[f"gaitmap-healthy/{side}"] = {**measure(rec, rec.reference.t, rec.reference.pos),
+                                                 "vicon": vicon_check(side, rec, pose, t_mocap, marker_set)}
         for side, rec in load_recordings("ucr-fgo", DATA):
             result[f"ucr-fgo/{side}"] = measure(rec)
     return result
