@@ -82,19 +82,28 @@ def gaitmap_feet():
         yield side, rec, poses[side], t_mocap, markers[side]
 
 
+def vicon_rate_in_sensor_frame(side, rec, pose, t_mocap, marker_set, cutoff_hz: float) -> np.ndarray:
+    """(N, 3) rad/s: the Vicon three-marker body's angular rate (markers low-passed at ``cutoff_hz``) on the IMU
+    clock of ``rec``, in the sensor frame (``pose.mount_rotation``); NaN outside the mocap take."""
+    filled = {k: filled_markers(v, t_mocap) for k, v in marker_set.items()}
+    _, rotation = mocap.marker_frame(filled["FCC"], filled["TOE"], filled["FM5"], side)
+    kin = mocap.body_kinematics(np.zeros((len(t_mocap), 3)), rotation, MOCAP_RATE_HZ, cutoff_hz)
+    t = np.asarray(rec.t, float)
+    inside = (t + pose.clock_offset > t_mocap[0]) & (t + pose.clock_offset < t_mocap[-1])
+    foot_in_sensor = np.full((len(t), 3), np.nan)
+    foot_in_sensor[inside] = CubicSpline(t_mocap, kin.rate_body)(t[inside] + pose.clock_offset) @ pose.mount_rotation
+    return foot_in_sensor
+
+
 def gaitmap_rates(cutoff_hz: float = CUTOFF_HZ) -> dict:
     """Per gaitmap foot: :func:`summary` of the raw and the low-passed gyro, of the Vicon body's rate in the
     sensor frame and of their difference (out of foot), both low-passed at ``cutoff_hz``; and each stride's core
     mean of the Vicon rate and of the difference ("strides": (K, 3) rad/s each, in stride order)."""
     out = {}
     for side, rec, pose, t_mocap, marker_set in gaitmap_feet():
-        filled = {k: filled_markers(v, t_mocap) for k, v in marker_set.items()}
-        _, rotation = mocap.marker_frame(filled["FCC"], filled["TOE"], filled["FM5"], side)
-        kin = mocap.body_kinematics(np.zeros((len(t_mocap), 3)), rotation, MOCAP_RATE_HZ, cutoff_hz)
         t = np.asarray(rec.t, float)
-        inside = (t + pose.clock_offset > t_mocap[0]) & (t + pose.clock_offset < t_mocap[-1])
-        foot_in_sensor = np.full((len(t), 3), np.nan)
-        foot_in_sensor[inside] = CubicSpline(t_mocap, kin.rate_body)(t[inside] + pose.clock_offset) @ pose.mount_rotation
+        foot_in_sensor = vicon_rate_in_sensor_frame(side, rec, pose, t_mocap, marker_set, cutoff_hz)
+        inside = np.all(np.isfinite(foot_in_sensor), axis=1)
         gyr = mocap.lowpass(rec.gyr, cutoff_hz, IMU_RATE_HZ)
         flats = foot_flats(rec)
         flats = flats[(flats[:, 0] > t[inside][0]) & (flats[:, 1] < t[inside][-1])]

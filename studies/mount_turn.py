@@ -107,6 +107,13 @@ def _core_window(u: np.ndarray, edge: float = 0.1) -> np.ndarray:
             * (1 - _smoothstep(np.clip((u - 1 + 2 * edge) / edge, 0, 1))))
 
 
+def swing_return(t: np.ndarray, to: float, ic_next: float, total: float) -> tuple[np.ndarray, np.ndarray]:
+    """(swing mask (N,), rate over the swing (n,)): the rate that turns the angle ``total`` back over the swing
+    [to, ic_next) s, -total 2 sin^2(pi u) / T_swing (in the unit of ``total`` per s)."""
+    swing = (t >= to) & (t < ic_next)
+    return swing, -total * 2 * np.sin(np.pi * (t[swing] - to) / (ic_next - to)) ** 2 / (ic_next - to)
+
+
 def signal_turn_truth(truth, events, real_t: np.ndarray, real_rate: np.ndarray, real_flats: np.ndarray,
                       edge: float = 0.1):
     """The truth with its sensor turned about its z axis by a measured rate signal: twin stride k's foot flat
@@ -128,8 +135,8 @@ def signal_turn_truth(truth, events, real_t: np.ndarray, real_rate: np.ndarray, 
         fine = np.linspace(0, 1, 2001)
         total = (np.trapezoid(_core_window(fine, edge) * np.interp(a + fine * (b - a), real_t, real_rate), fine)
                  * (ho - ff))
-        swing = (t >= to) & (t < ic_next)
-        rate[swing] = -total * 2 * np.sin(np.pi * (t[swing] - to) / (ic_next - to)) ** 2 / (ic_next - to)
+        swing, back = swing_return(t, to, ic_next, total)
+        rate[swing] = back
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
     axis = np.array([0.0, 0.0, 1.0])
     return apply_turn(truth, theta[:, None] * axis, rate[:, None] * axis), np.abs(theta)
