@@ -79,8 +79,14 @@ Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
 
 Measured foot-IMU peaks the kinds are checked against (``PUBLISHED_PEAKS``; a test asserts them from the
 simulated truth within 20 %): walking at the seed pace 600-1000 deg/s and 5-15 g (anchors §7: the shared
-recordings and the seed paper's VN-200 walk); running about 1500 deg/s and 15 g at the foot (issue 17; IMUs
-with a 16 g / 2000 deg/s range saturate in running: Potter et al., Sensors 19(11):2601, 2019).
+recordings and the seed paper's VN-200 walk); running about 1500 deg/s and 15 g at the foot (issue 17; the
+saturation of the accelerometer or gyro of some IMU designs in running, up to 6.4 m/s, spoils ZUPT gait parameters:
+Potter et al., Sensors 19(11):2601, 2019). Where the running peak falls: the foot's pitch-rate extremes mark toe off
+and foot contact (Falbriard et al., Front. Physiol. 9:610, 2018), as here (the peak is the toe-off rate). Not
+reproduced: the rearfoot strikers' heel-to-toe rollover, whose peak sagittal rate is 846 deg/s (mean, the lowest of
+five midsole stiffnesses; Braeuer et al., Sensors 21(15):5010, 2021) against 250 / 265 / 424 deg/s here at 150 /
+165 / 180 steps/min (median over strides): it would take a heel rocker of about 30 ms instead of 73 ms at 165
+steps/min, which the stance timing above does not give.
 """
 
 from __future__ import annotations
