@@ -3,7 +3,7 @@
     PYTHONPATH=$PWD python benchmarks/nav_parts.py [--repeats 5] [--calls 200000]
 
 Each part is called ``--calls`` times in a compiled loop on the 99.6 m walk's samples (scenarios/straight_100m.toml)
-and a covariance taken from the filter itself at a stance sample; printed in ns of CPU time per call (the best of
+and a covariance built from the filter's own variances at a stance sample; printed in ns of CPU time per call (the best of
 ``--repeats``), next to the whole filter per sample (rk4, every sample's estimates kept) and the SHOE detector per
 sample that nav_speed.py's ratios include. The ZUPT update is timed on a copy of P restored before each call; the
 copy's own time, timed alone, is subtracted.
@@ -32,8 +32,8 @@ STATES = 15
 
 @njit
 def _propagations(P, calls, t, fhat, C, power):
-    """``calls`` covariance propagations over the recording's intervals (P drifts; its size stays realistic over a
-    few seconds of samples, as the filter's does between updates)."""
+    """``calls`` covariance propagations over the recording's intervals (P grows without updates; the time per
+    call does not depend on its values, which stay finite and normal)."""
     a = C @ fhat
     for c in range(calls):
         k = c % (t.shape[0] - 1)
