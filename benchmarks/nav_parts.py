@@ -3,10 +3,10 @@
     PYTHONPATH=$PWD python benchmarks/nav_parts.py [--repeats 5] [--calls 200000]
 
 Each part is called ``--calls`` times in a compiled loop on the 99.6 m walk's samples (scenarios/straight_100m.toml)
-and a covariance built from the filter's own variances at a stance sample; printed in ns of CPU time per call (the best of
-``--repeats``), next to the whole filter per sample (rk4, every sample's estimates kept) and the SHOE detector per
-sample that nav_speed.py's ratios include. The ZUPT update is timed on a copy of P restored before each call; the
-copy's own time, timed alone, is subtracted.
+and a covariance built from the filter's own variances at a stance sample; printed in ns of CPU time per call (the
+best of ``--repeats``), next to the whole filter per sample (rk4, every sample's estimates kept) and the SHOE
+detector per sample that nav_speed.py's ratios include. The ZUPT update is timed on a copy of P restored before each
+call; the copy's own time, timed alone, is subtracted.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from nav._numba.covariance import joseph_update, propagate, update_buffers
 from nav._numba.strapdown import MODE_POINT_SAMPLES, increment_buffers, interval_increments
 from nav.alignment import align
 from nav.ekf import FilterConfig, run_filter
+from nav_speed import best_time  # a sibling script (benchmarks/ is on the path)
 
 ROOT = Path(__file__).resolve().parents[1]
 STATES = 15
@@ -79,16 +80,6 @@ def _increments(calls, t, acc, gyr):
     return total
 
 
-def best_cpu(fn, repeats: int) -> float:
-    """Shortest CPU time (s) of ``repeats`` calls of fn."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        fn()
-        times.append(time.process_time() - t0)
-    return min(times)
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="timed repeats, best kept (default 5)")
@@ -120,17 +111,18 @@ def main(argv=None) -> int:
     _increments(10, rec.t, rec.acc, rec.gyr)  # compile
     _updates(P0, 10, False, z, r_var)
 
+    def cpu(fn):
+        return best_time(fn, args.repeats, time.process_time)
+
     parts = {
-        "SHOE detection, per sample": best_cpu(lambda: detectors.detect("shoe", rec.t, rec.acc, rec.gyr),
-                                               args.repeats) / rec.n,
-        "whole filter, per sample": best_cpu(whole, args.repeats) / rec.n,
-        "RK4 increments, per interval": best_cpu(lambda: _increments(calls, rec.t, rec.acc, rec.gyr),
-                                                 args.repeats) / calls,
-        "covariance propagation, per interval": best_cpu(lambda: _propagations(P0.copy(), calls, rec.t, fhat, C,
-                                                                               power), args.repeats) / calls,
+        "SHOE detection, per sample": cpu(lambda: detectors.detect("shoe", rec.t, rec.acc, rec.gyr)) / rec.n,
+        "whole filter, per sample": cpu(whole) / rec.n,
+        "RK4 increments, per interval": cpu(lambda: _increments(calls, rec.t, rec.acc, rec.gyr)) / calls,
+        "covariance propagation, per interval": cpu(lambda: _propagations(P0.copy(), calls, rec.t, fhat, C,
+                                                                          power)) / calls,
     }
-    restore = best_cpu(lambda: _updates(P0, calls, True, z, r_var), args.repeats)
-    update = best_cpu(lambda: _updates(P0, calls, False, z, r_var), args.repeats)
+    restore = cpu(lambda: _updates(P0, calls, True, z, r_var))
+    update = cpu(lambda: _updates(P0, calls, False, z, r_var))
     parts["ZUPT update (Joseph, 3 rows), per update"] = (update - restore) / calls
     share = det.stationary[alignment.start:].mean()
     width = max(len(k) for k in parts)
