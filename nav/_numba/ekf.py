@@ -174,7 +174,7 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
 
     C = np.empty((3, 3))
     a = np.empty(3)
-    dq, du, ds, fhat, wk = increment_buffers()
+    dq, du, ds, fhat, weights = increment_buffers()
     dx = np.zeros(n)
     h_col = np.zeros((3, 4), np.int64)  # sparse measurement matrix: columns, values, count per row
     h_val = np.zeros((3, 4))
@@ -250,7 +250,7 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
             break
 
         # ---- propagate to t_k+1
-        h = interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, wk)
+        h = interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, weights)
         qmatrix(q, C)
         for i in range(3):
             a[i] = C[i, 0] * fhat[0] + C[i, 1] * fhat[1] + C[i, 2] * fhat[2]

@@ -111,12 +111,36 @@ def mid_samples_into(t, x, out):
 
 
 @njit(cache=True)
-def interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, wk):
+def _mid_sample(weights, x, j0, j1, j2, j3):
+    """The weighted sum of rows j0..j3 of x (N, 3) with the (4,) weights of :func:`mid_sample_weights`, a 3-tuple."""
+    return ((weights[0] * x[j0, 0] + weights[1] * x[j1, 0] + weights[2] * x[j2, 0] + weights[3] * x[j3, 0]),
+            (weights[0] * x[j0, 1] + weights[1] * x[j1, 1] + weights[2] * x[j2, 1] + weights[3] * x[j3, 1]),
+            (weights[0] * x[j0, 2] + weights[1] * x[j1, 2] + weights[2] * x[j2, 2] + weights[3] * x[j3, 2]))
+
+
+@njit(cache=True)
+def _less_bias(f, ba):
+    """Specific force sample f (3,) less the accelerometer bias ba (3,), m/s^2, as a 3-tuple."""
+    return f[0] - ba[0], f[1] - ba[1], f[2] - ba[2]
+
+
+@njit(cache=True)
+def _corrected_rate(w, bg, G, f):
+    """Rate sample w (3,) less the gyro bias bg (3,) and the g-sensitivity G (9,) times the corrected specific force
+    f (3-tuple), rad/s, as a 3-tuple."""
+    return (w[0] - bg[0] - (G[0] * f[0] + G[1] * f[1] + G[2] * f[2]),
+            w[1] - bg[1] - (G[3] * f[0] + G[4] * f[1] + G[5] * f[2]),
+            w[2] - bg[2] - (G[6] * f[0] + G[7] * f[1] + G[8] * f[2]))
+
+
+@njit(cache=True)
+def interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, weights):
     """Bias-corrected body increments over [t_k, t_k+1]; returns h = t_k+1 - t_k (s).
 
     ``u_acc``, ``u_gyr`` are the samples (or increments); the mid-interval samples are interpolated here
     (:func:`mid_sample_weights`). ``ba``, ``bg``, ``G`` are the bias and g-sensitivity estimates. Writes
-    ``dq``, ``du``, ``ds`` and the corrected specific force at t_k into ``fhat``; ``wk`` is a (7, 4) work buffer.
+    ``dq``, ``du``, ``ds`` and the corrected specific force at t_k into ``fhat``; ``weights`` is a (4,) work
+    buffer. The samples of the interval are held in scalars (tuples), not buffers, so that they stay in registers.
     """
     h = t[k + 1] - t[k]
     if mode == MODE_INCREMENTS:
@@ -131,30 +155,24 @@ def interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, w
         for i in range(3):
             ds[i] = 0.5 * h * du[i]  # trapezoid position increment
     else:
-        f0, fm, f1, w0, wm, w1, weights = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6]
         first = mid_sample_weights(t, k, weights)
         n = t.shape[0]
         j1, j2, j3 = min(first + 1, n - 1), min(first + 2, n - 1), min(first + 3, n - 1)
-        for i in range(3):
-            f0[i] = u_acc[k, i] - ba[i]
-            fm[i] = (weights[0] * u_acc[first, i] + weights[1] * u_acc[j1, i] + weights[2] * u_acc[j2, i]
-                     + weights[3] * u_acc[j3, i]) - ba[i]
-            f1[i] = u_acc[k + 1, i] - ba[i]
-            wm[i] = (weights[0] * u_gyr[first, i] + weights[1] * u_gyr[j1, i] + weights[2] * u_gyr[j2, i]
-                     + weights[3] * u_gyr[j3, i])
-        for i in range(3):
-            w0[i] = u_gyr[k, i] - bg[i] - (G[3 * i] * f0[0] + G[3 * i + 1] * f0[1] + G[3 * i + 2] * f0[2])
-            wm[i] = wm[i] - bg[i] - (G[3 * i] * fm[0] + G[3 * i + 1] * fm[1] + G[3 * i + 2] * fm[2])
-            w1[i] = u_gyr[k + 1, i] - bg[i] - (G[3 * i] * f1[0] + G[3 * i + 1] * f1[1] + G[3 * i + 2] * f1[2])
-            fhat[i] = f0[i]
+        f0 = _less_bias(u_acc[k], ba)
+        fm = _less_bias(_mid_sample(weights, u_acc, first, j1, j2, j3), ba)
+        f1 = _less_bias(u_acc[k + 1], ba)
+        w0 = _corrected_rate(u_gyr[k], bg, G, f0)
+        wm = _corrected_rate(_mid_sample(weights, u_gyr, first, j1, j2, j3), bg, G, fm)
+        w1 = _corrected_rate(u_gyr[k + 1], bg, G, f1)
+        fhat[0], fhat[1], fhat[2] = f0
         rk4_increment(h, w0, wm, w1, f0, fm, f1, dq, du, ds)
     return h
 
 
 @njit(cache=True)
 def increment_buffers():
-    """Work buffers of :func:`interval_increments`: dq (4), du (3), ds (3), fhat (3), wk (7, 4)."""
-    return np.empty(4), np.empty(3), np.empty(3), np.empty(3), np.empty((7, 4))
+    """Work buffers of :func:`interval_increments`: dq (4), du (3), ds (3), fhat (3), weights (4)."""
+    return np.empty(4), np.empty(3), np.empty(3), np.empty(3), np.empty(4)
 
 
 @njit(cache=True)
@@ -166,12 +184,12 @@ def strapdown_run(mode, t, u_acc, u_gyr, i0, q0, v0, p0, gravity, quat, vel, pos
     p = p0.copy()
     zero3 = np.zeros(3)
     zero9 = np.zeros(9)
-    dq, du, ds, fhat, wk = increment_buffers()
+    dq, du, ds, fhat, weights = increment_buffers()
     for k in range(i0, n_samples):
         quat[k] = q
         vel[k] = v
         pos[k] = p
         if k == n_samples - 1:
             break
-        h = interval_increments(mode, k, t, u_acc, u_gyr, zero3, zero3, zero9, dq, du, ds, fhat, wk)
+        h = interval_increments(mode, k, t, u_acc, u_gyr, zero3, zero3, zero9, dq, du, ds, fhat, weights)
         apply_increment(q, v, p, dq, du, ds, h, gravity)
