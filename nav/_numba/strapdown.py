@@ -98,19 +98,6 @@ def mid_sample_weights(t, k, weights):
 
 
 @njit(cache=True)
-def mid_samples_into(t, x, out):
-    """out (N, c): the values of x (N, c) at the interval midpoints (last row x[-1]), as nav.strapdown.mid_samples."""
-    n = t.shape[0]
-    weights = np.empty(4)
-    out[n - 1] = x[n - 1]
-    for k in range(n - 1):
-        first = mid_sample_weights(t, k, weights)
-        for c in range(x.shape[1]):
-            out[k, c] = (weights[0] * x[first, c] + weights[1] * x[min(first + 1, n - 1), c]
-                         + weights[2] * x[min(first + 2, n - 1), c] + weights[3] * x[min(first + 3, n - 1), c])
-
-
-@njit(cache=True)
 def _mid_sample(weights, x, j0, j1, j2, j3):
     """The weighted sum of rows j0..j3 of x (N, 3) with the (4,) weights of :func:`mid_sample_weights`, a 3-tuple."""
     return ((weights[0] * x[j0, 0] + weights[1] * x[j1, 0] + weights[2] * x[j2, 0] + weights[3] * x[j3, 0]),
