@@ -11,8 +11,10 @@ import json
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
+from gaitsim.imu.presets import get_preset
 from gaitsim.loop import blind, residuals, transfer
 from gaitsim.loop.twin import TwinSimulator
 
@@ -41,18 +43,37 @@ BMI160_STANCE = pytest.mark.xfail(strict=True, reason=(
     "accelerometer offset reads as a 4.3 deg mount pitch in the twin's fit from gravity, which projects the "
     "foot's 4.5 deg/s pronation roll onto z (0.33 deg/s); with that offset removed no stance effect is named. "
     "A mount pitch leaves the foot's pitch axis on the sensor's y, so the gyro cannot separate it from the "
-    "offset."))
+    "offset. It also names accel_scale_z +1.96 % and accel_scale_x -1.16 %, which the BMI160 preset does not "
+    "have: its turn-on bias vector (-75, 13.5, 12) mg is explained by no single-axis bias (closure_up misfit: "
+    "scale_z 136, bias_z alone 526, bias_x alone 553; python3 -m studies.blind_candidates bmi160)."))
 SENSOR_CASES = [pytest.param(s, marks=BMI160_STANCE) if s == "bmi160" else s for s in blind.SENSORS]
 
 
+def preset_errors(sensor: str) -> set:
+    """The library effects that name an error the preset ``sensor`` really has: an accelerometer bias on every
+    axis with a fixed bias or a turn-on spread, a scale on every axis whose diagonal term differs from 1,
+    g-sensitivity where G_g is not zero, mount yaw where the preset turns the sensor on the foot."""
+    p = get_preset(sensor).parameters
+    errors = set()
+    for i, axis in enumerate("xyz"):
+        if p["accel_bias"][i] or p["accel_bias_repeatability"][i]:
+            errors.add(f"accel_bias_{axis}")
+        for kind in ("accel", "gyro"):
+            if p[f"{kind}_misalignment"][i, i] != 1.0:
+                errors.add(f"{kind}_scale_{axis}")
+    if np.any(p["gyro_g_sensitivity"]):
+        errors.add("g_sensitivity")
+    if p["mounting_misalignment"][2]:
+        errors.add("mount_yaw")
+    return errors
+
+
 @pytest.mark.parametrize("sensor", SENSOR_CASES)
-def test_untouched_recording_names_only_sensor_calibration_effects(sensor):
-    """What the loop names on an untouched recording must be a sensor error the preset really has (its
-    accelerometer bias, scale and misalignment, its gyro scale and g-sensitivity): no gait or timing effect."""
+def test_untouched_recording_names_only_errors_its_sensor_has(sensor):
+    """What the loop names on an untouched recording must be an error its preset really has (:func:`preset_errors`):
+    no gait or timing effect, no scale error of a sensor without one."""
     named = blind.named_effects(untouched(sensor))
-    allowed = {*(f"{kind}_{axis}" for kind in ("accel_scale", "accel_bias", "gyro_scale")
-                                for axis in "xyz"), "mount_yaw", "g_sensitivity"}
-    assert set(named) <= allowed, named
+    assert set(named) <= preset_errors(sensor), named
 
 
 @pytest.mark.parametrize("sensor", blind.SENSORS)
