@@ -309,7 +309,7 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
         report.counts.update(closure_speed_median_mps=median, closure_tilt_median_deg=math.degrees(np.median(tilt)),
                              closure_strides_off=off)
         if median > MAX_CLOSURE_SPEED:
-            scale, scaled = best_gyro_scale(t, acc, gyr, gravity, rests, tops.any(axis=1))
+            scale, scaled = best_gyro_scale(t, acc, gyr, gravity, rests, tops.any(axis=1), median)
             report.counts.update(closure_best_gyro_scale=scale, closure_speed_median_at_best_scale_mps=scaled)
             fast = (f"{name}: gyro against accelerometer: carried by the gyro from one rest to the next, {off} of "
                     f"{len(speed)} strides end faster than {MAX_CLOSURE_SPEED:g} m/s (median {median:.3g} m/s, tilt "
@@ -329,13 +329,14 @@ def check_recording(rec: Recording, gravity: float = DEFAULT_GRAVITY, name: str 
 
 
 def best_gyro_scale(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float,
-                    rests: tuple[np.ndarray, np.ndarray], spoiled: np.ndarray) -> tuple[float, float]:
+                    rests: tuple[np.ndarray, np.ndarray], spoiled: np.ndarray,
+                    own_median: float) -> tuple[float, float]:
     """The gyro scale, 1 or one of :data:`GYRO_SCALES_TRIED`, whose median stride-closure speed (m/s,
     :func:`closure_between_rests` over the same ``rests``, leaving out strides with ``spoiled`` samples) is least,
-    and that median."""
+    and that median; ``own_median`` is the gyro's own (scale 1), already measured."""
     scales = (1.0, *GYRO_SCALES_TRIED)
-    medians = [float(np.median(closure_between_rests(t, acc, gyr * scale, gravity, rests, spoiled)[0]))
-               for scale in scales]
+    medians = [own_median] + [float(np.median(closure_between_rests(t, acc, gyr * scale, gravity, rests, spoiled)[0]))
+                              for scale in GYRO_SCALES_TRIED]
     best = int(np.argmin(medians))
     return scales[best], medians[best]
 

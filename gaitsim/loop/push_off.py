@@ -21,11 +21,11 @@ two readings:
   twin, so that part cancels. A shift of the gyro by tau moves the reading by tau.
 - **The height** (:func:`push_off_height`): r read at the lag, projected on the up direction of the foot flat
   (the mean specific force over the detected stances; at the stance's end the heel has begun to rise, and a
-  tilt of 2 deg there moves the height of a sensor 15 cm behind the pivot by 5 mm) and on the forward one (up crossed into the turn's axis, whose sense makes the heel
-  rise). The turns are about the foot's lateral axis, so r along it is not seen (the pseudo-inverse leaves it
-  out); along the other two it is. The height is above the turn's pivot: the twin's toe contact lies on its sole,
-  so a twin whose sensor sits at this height turns in push-off as the recording's does, whatever the real pivot's
-  height in the shoe.
+  tilt of 2 deg there moves the height of a sensor 15 cm behind the pivot by 5 mm) and on the forward one (up
+  crossed into the turn's axis, whose sense makes the heel rise). The turns are about the foot's lateral axis,
+  so r along it is not seen (the pseudo-inverse leaves it out); along the other two it is. The height is above
+  the turn's pivot: the twin's toe contact lies on its sole, so a twin whose sensor sits at this height turns in
+  push-off as the recording's does, whatever the real pivot's height in the shoe.
 
 Both readings need no template and no model of the gait: a twin whose swing is off reads them as the recording
 does. Their standard errors are the jackknife over the stances. The height's fit leaves out the stances whose own

@@ -163,7 +163,8 @@ def _stance_velocity(t: np.ndarray, pos_t: np.ndarray, pos: np.ndarray, strides:
     valid = ((t_mid + (t[s1] - t[s0]) <= pt[-1]) & (t[c0] >= pt[0]) & (length >= settings.MIN_TRACK_STRIDE_M)
              & (tb - ta > 0))
     with np.errstate(divide="ignore", invalid="ignore"):
-        velocity = np.einsum("ij,ij->i", resample(tb, pt, pp) - resample(ta, pt, pp), step / length[:, None]) / (tb - ta)
+        along = np.einsum("ij,ij->i", resample(tb, pt, pp) - resample(ta, pt, pp), step / length[:, None])
+        velocity = along / (tb - ta)
     return np.where(valid, velocity, math.nan)
 
 

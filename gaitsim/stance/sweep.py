@@ -218,8 +218,9 @@ def run_thresholds(rec: Recording, track_t: np.ndarray, track_pos: np.ndarray, t
         found.append(windows(t, stationary, track_t, track_pos))
     steps = [_steps(sol, w) for sol, w in zip(solutions, found)]
     if track_pseudo:
-        pseudo = pipeline.navigate_variants(rec, [nav_options(th, track_pseudo_velocity(t, track_t, track_pos, w), method)
-                                                  for th, w in zip(thresholds, found)])
+        options = [nav_options(th, track_pseudo_velocity(t, track_t, track_pos, w), method)
+                   for th, w in zip(thresholds, found)]
+        pseudo = pipeline.navigate_variants(rec, options)
         steps_pseudo = [_steps(sol, w) for sol, w in zip(pseudo, found)]
     else:
         steps_pseudo = [np.full_like(s, np.nan) for s in steps]
