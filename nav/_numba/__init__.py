@@ -1,7 +1,11 @@
 """Compiled (numba) inner loops of the strapdown and the error-state EKF; private: use nav.strapdown and nav.ekf.
 
 Everything here works on plain float64 arrays, allocates its work buffers once per run and is compiled with
-``cache=True`` so a new process does not recompile. Frames and units are those of the package: world ENU (m,
+``cache=True`` so a new process does not recompile. The helpers the filter calls every sample (the increments, the
+nominal state's advance, the propagation, the store, the update and its injection) are inlined into it
+(``inline="always"``): a call hands each array over as its separate fields (pointer, shape, strides, ...), which cost
+about 110 ns per 15-state sample, a seventh of the filter. numba's cache does not see a change in a callee's file:
+after editing one, delete nav/_numba/__pycache__ (or touch ekf.py) or the filter keeps its old compiled code. Frames and units are those of the package: world ENU (m,
 m/s), body frame of the sensor, quaternions (w, x, y, z) body->world, specific force in m/s^2, rates in rad/s.
 
 - :mod:`.quat`: quaternion product, rotation, exponential map and matrix on scalars (the compiled twins of

@@ -100,7 +100,7 @@ def transition_transposed(lam, n, h, a, C, f):
                     lam[15 + 3 * c + e] -= ct * f[e]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def propagate(P, n, h, a, C, f, noise_power):
     """P <- Phi P Phi^T + Q in place over one interval of h seconds; Q = diag(noise_power) h.
 

@@ -57,7 +57,7 @@ def initial_covariance_and_noise(n, cfg):
     return P, power
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
     """Write the nominal state into row k of the outputs (the estimates into their only row when they keep the
     final sample's alone: see :func:`filter_run`)."""
@@ -73,7 +73,7 @@ def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
         gsens[e, i] = G[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _inject(dx, n, q, v, p, ba, bg, G):
     """Closed loop: add the error-state estimate dx to the nominal state."""
     for i in range(3):
@@ -100,7 +100,7 @@ def smoother_buffers(records, n, steps):
             np.zeros((records, 3)), np.empty((steps, 3)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _update(k, P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, work, q, v, p, ba, bg, G, rts, records, count):
     """One Joseph-form update injected into the nominal state, recorded for the smoother when ``rts``.
 
