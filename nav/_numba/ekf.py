@@ -135,7 +135,8 @@ def filter_run(mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
     it receives every sample in turn and holds the last one's (not with ``rts``, which reads them back). Returns
     the number of measurement updates skipped because the innovation covariance was not positive definite.
 
-    The state count is a constant in each branch: the compiler unrolls and vectorises the block loops for it.
+    The state count is a constant in each branch: the compiler unrolls the block loops for it (for 9 and 15 states
+    they are too short, under 16 iterations, for LLVM to vectorise them).
     """
     if cfg.states == 9:
         return _filter(9, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p0, cfg, rts, quat, vel,
