@@ -176,6 +176,7 @@ def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, w):
     hu01, hu02, hu12 = _hu(w, h_col, h_val, h_cnt, m, 0, 1), _hu(w, h_col, h_val, h_cnt, m, 0, 2), \
         _hu(w, h_col, h_val, h_cnt, m, 1, 2)
     r0, r1, r2 = (r_var[0] if m > 0 else 0.0), (r_var[1] if m > 1 else 0.0), (r_var[2] if m > 2 else 0.0)
+    # S = H U + R, its diagonal padded with ones beyond m
     ok, i00, i01, i02, i11, i12, i22 = spd_inverse3(hu00 + (r0 if m > 0 else 1.0), hu10, hu11 + (r1 if m > 1 else 1.0),
                                                     hu20, hu21, hu22 + (r2 if m > 2 else 1.0))
     if not ok:
