@@ -6,7 +6,10 @@ Each part is called ``--calls`` times in a compiled loop on the 99.6 m walk's sa
 and a covariance built from the filter's own variances at a stance sample; printed in ns of CPU time per call (the
 best of ``--repeats``), next to the whole filter per sample (rk4, every sample's estimates kept) and the SHOE
 detector per sample that nav_speed.py's ratios include. The ZUPT update is timed on a copy of P restored before each
-call; the copy's own time, timed alone, is subtracted.
+call; the copy's own time, timed alone, is subtracted. The state count is passed as a literal, as the filter passes
+it (numba compiles a kernel per literal: its loops are unrolled for it). Besides the covariance algebra, a sample
+costs the nominal state's advance by the increments, the store of its estimates (and variances) and, at a stance
+sample, the injection of the correction (quaternion exponential, product, normalisation).
 """
 
 from __future__ import annotations
@@ -22,7 +25,8 @@ from gaitsim.scenario import load_scenario
 from gaitsim.simulate import simulate_walk
 from nav import detectors
 from nav._numba.covariance import joseph_update, propagate, update_buffers
-from nav._numba.strapdown import MODE_POINT_SAMPLES, increment_buffers, interval_increments
+from nav._numba.ekf import _inject, _store
+from nav._numba.strapdown import MODE_POINT_SAMPLES, apply_increment, increment_buffers, interval_increments
 from nav.alignment import align
 from nav.ekf import FilterConfig, run_filter
 from nav_speed import best_time  # a sibling script (benchmarks/ is on the path)
@@ -44,7 +48,7 @@ def _propagations(P, calls, t, fhat, C, power):
 @njit
 def _updates(P0, calls, restore_only, z, r_var):
     """``calls`` velocity updates (H selects states 3:6), each on a fresh copy of P0 (or the copy alone)."""
-    n = P0.shape[0]
+    n = STATES
     P = P0.copy()
     h_col = np.zeros((3, 4), np.int64)
     h_val = np.zeros((3, 4))
@@ -80,6 +84,63 @@ def _increments(calls, t, acc, gyr):
     return total
 
 
+@njit
+def _increment_table(t, acc, gyr):
+    """Every interval's RK4 increments, zero biases: (N - 1, 10) rows of dq (4), du (3), ds (3)."""
+    table = np.empty((t.shape[0] - 1, 10))
+    dq, du, ds, fhat, weights = increment_buffers()
+    zero3, zero9 = np.zeros(3), np.zeros(9)
+    for k in range(table.shape[0]):
+        interval_increments(MODE_POINT_SAMPLES, k, t, acc, gyr, zero3, zero3, zero9, dq, du, ds, fhat, weights)
+        table[k, :4], table[k, 4:7], table[k, 7:] = dq, du, ds
+    return table
+
+
+@njit
+def _advances(calls, t, table, gravity):
+    """``calls`` advances of the nominal state (attitude, velocity, position) by the increments of ``table``
+    (:func:`_increment_table`)."""
+    q = np.array([1.0, 0.0, 0.0, 0.0])
+    v = np.zeros(3)
+    p = np.zeros(3)
+    dq, du, ds, _, _ = increment_buffers()
+    for c in range(calls):
+        k = c % table.shape[0]
+        for i in range(4):  # the filter's increment buffers, filled as interval_increments fills them
+            dq[i] = table[k, i]
+        for i in range(3):
+            du[i], ds[i] = table[k, 4 + i], table[k, 7 + i]
+        apply_increment(q, v, p, dq, du, ds, t[k + 1] - t[k], gravity)
+    return q[0]
+
+
+@njit
+def _stores(calls, n_samples, P):
+    """``calls`` stores of a sample's estimates and variances into every-sample outputs of ``n_samples`` rows."""
+    quat, vel, pos = np.empty((n_samples, 4)), np.empty((n_samples, 3)), np.empty((n_samples, 3))
+    bias_acc, bias_gyr, gsens = np.empty((n_samples, 3)), np.empty((n_samples, 3)), np.empty((n_samples, 9))
+    p_diag = np.empty((n_samples, STATES))
+    q, v, p, ba, bg, G = np.ones(4), np.ones(3), np.ones(3), np.ones(3), np.ones(3), np.ones(9)
+    for c in range(calls):
+        k = c % n_samples
+        _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
+        for i in range(STATES):
+            p_diag[k, i] = P[i, i]
+    return quat[0, 0]
+
+
+@njit
+def _injections(calls, dx):
+    """``calls`` injections of the error estimate ``dx`` into a nominal state, its sign alternated (so that the state
+    stays near its start)."""
+    q = np.array([1.0, 0.0, 0.0, 0.0])
+    v, p, ba, bg, G = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(9)
+    minus = -dx
+    for c in range(calls):
+        _inject(dx if c % 2 == 0 else minus, STATES, q, v, p, ba, bg, G)
+    return q[0]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="timed repeats, best kept (default 5)")
@@ -108,8 +169,13 @@ def main(argv=None) -> int:
     z = np.array([0.01, -0.02, 0.005])
     r_var = np.full(3, cfg.zupt_sigma ** 2)
     calls = args.calls
+    dx = np.concatenate([np.full(6, 1e-3), np.full(3, 1e-4), np.full(6, 1e-5)])  # a ZUPT's size of correction
     _increments(10, rec.t, rec.acc, rec.gyr)  # compile
     _updates(P0, 10, False, z, r_var)
+    table = _increment_table(rec.t, rec.acc, rec.gyr)
+    _advances(10, rec.t, table, cfg.gravity)
+    _stores(10, rec.n, P0)
+    _injections(10, dx)
 
     def cpu(fn):
         return best_time(fn, args.repeats, time.process_time)
@@ -120,6 +186,9 @@ def main(argv=None) -> int:
         "RK4 increments, per interval": cpu(lambda: _increments(calls, rec.t, rec.acc, rec.gyr)) / calls,
         "covariance propagation, per interval": cpu(lambda: _propagations(P0.copy(), calls, rec.t, fhat, C,
                                                                           power)) / calls,
+        "nominal state advance, per interval": cpu(lambda: _advances(calls, rec.t, table, cfg.gravity)) / calls,
+        "store of the estimates and variances, per sample": cpu(lambda: _stores(calls, rec.n, P0)) / calls,
+        "injection of a correction, per update": cpu(lambda: _injections(calls, dx)) / calls,
     }
     restore = cpu(lambda: _updates(P0, calls, True, z, r_var))
     update = cpu(lambda: _updates(P0, calls, False, z, r_var))

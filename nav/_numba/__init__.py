@@ -1,13 +1,18 @@
 """Compiled (numba) inner loops of the strapdown and the error-state EKF; private: use nav.strapdown and nav.ekf.
 
 Everything here works on plain float64 arrays, allocates its work buffers once per run and is compiled with
-``cache=True`` so a new process does not recompile. Frames and units are those of the package: world ENU (m,
-m/s), body frame of the sensor, quaternions (w, x, y, z) body->world, specific force in m/s^2, rates in rad/s.
+``cache=True`` so a new process does not recompile. The helpers the filter calls every sample (the increments, the
+nominal state's advance, the propagation, the store, the update and its injection) are inlined into it
+(``inline="always"``): a call hands each array over as its separate fields (pointer, shape, strides, ...), which cost
+about 110 ns per 15-state sample, a seventh of the filter. numba's cache does not see a change in a callee's file:
+after editing one, delete nav/_numba/__pycache__ (or touch ekf.py) or the filter keeps its old compiled code.
+Frames and units are those of the package: world ENU (m, m/s), body frame of the sensor, quaternions (w, x, y, z)
+body->world, specific force in m/s^2, rates in rad/s.
 
 - :mod:`.quat`: quaternion product, rotation, exponential map and matrix on scalars (the compiled twins of
   nav.quaternion, tested against it).
 - :mod:`.strapdown`: RK4 and exact-increment mechanisation of the nominal state.
-- :mod:`.linalg`: Cholesky factor and solve of small symmetric positive definite matrices.
+- :mod:`.linalg`: the inverse of a small (at most 3 x 3) symmetric positive definite matrix by Cholesky.
 - :mod:`.covariance`: error-state transition, covariance propagation and the Joseph-form update.
 - :mod:`.ekf`: the forward filter, the RTS pass and the batch over runs.
 """

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .linalg import inverse_buffers, spd_inverse
+from .linalg import spd_inverse3
 
 
 @njit(cache=True)
@@ -100,7 +100,7 @@ def transition_transposed(lam, n, h, a, C, f):
                     lam[15 + 3 * c + e] -= ct * f[e]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def propagate(P, n, h, a, C, f, noise_power):
     """P <- Phi P Phi^T + Q in place over one interval of h seconds; Q = diag(noise_power) h.
 
@@ -128,10 +128,23 @@ def propagate(P, n, h, a, C, f, noise_power):
         P[i, i] += noise_power[i] * h
 
 
+_U, _V, _W, _KT = 0, 1, 2, 3  # the n x 3 factors of the Joseph update in its work buffer, each held transposed
+
+
 @njit(cache=True)
 def update_buffers(n):
-    """Work buffers of :func:`joseph_update`: U, V, W (n, 3), HU, S^-1 (3, 3) and those of the inverse."""
-    return np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)), np.empty((3, 3)), inverse_buffers()
+    """Work buffer of :func:`joseph_update`: U, V, W and K, each transposed (3, n), in one (4, 3, n) array."""
+    return np.empty((4, 3, n))
+
+
+@njit(cache=True, inline="always")
+def _hu(w, h_col, h_val, h_cnt, m, r, q):
+    """(H U)[r, q]: row r of the sparse H times column q of U (held as row q of ``w[_U]``); 0 for r >= m."""
+    acc = 0.0
+    if r < m:
+        for e in range(h_cnt[r]):
+            acc += h_val[r, e] * w[_U, q, h_col[r, e]]
+    return acc
 
 
 @njit(cache=True)
@@ -140,50 +153,62 @@ def joseph_update(P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, w):
 
     H is sparse: row r has ``h_cnt[r]`` non-zeros ``h_val[r, :]`` in columns ``h_col[r, :]``. With
     ``U = P H^T``, ``S = H U + R``, ``K = U S^-1``, ``V = U - K H U`` and ``W = U - K R`` the Joseph form
-    ``(I - K H) P (I - K H)^T + K R K^T`` is ``P - K W^T - V K^T``; its upper triangle is computed and mirrored.
-    Rows m..2 of every 3-wide buffer are zero, so the inner loops have a fixed length of 3.
-    Writes the correction ``K z`` into ``dx``, the gain into ``K`` (n, 3) and ``S^-1 z`` into ``s`` (3,);
-    ``w`` holds :func:`update_buffers`. Returns False (P untouched) if S is not positive definite.
+    ``(I - K H) P (I - K H)^T + K R K^T`` is ``P - K W^T - V K^T``; its upper triangle is computed row by row
+    and mirrored. The n x 3 factors are held transposed in one work array ``w`` (:func:`update_buffers`; one
+    array, not a tuple of them, costs no reference counting per call); their rows m..2 are zero, and S is padded
+    with the identity there (:func:`spd_inverse3`, on scalars), so every sum has a fixed length of 3. P is
+    symmetric: column c of P is read as its row c.
+    Writes the correction ``K z`` into ``dx``, the gain into ``K`` (n, 3) and ``S^-1 z`` into ``s`` (3,).
+    Returns False (P untouched) if S is not positive definite.
     """
-    U, V, W, HU, S_inv, inverse_work = w
-    U[:, :] = 0.0
+    for r in range(3):
+        for i in range(n):
+            w[_U, r, i] = 0.0
     for r in range(m):
         for e in range(h_cnt[r]):
             c, value = h_col[r, e], h_val[r, e]
             for i in range(n):
-                U[i, r] += P[i, c] * value
-    HU[:, :] = 0.0
-    for r in range(m):
-        for e in range(h_cnt[r]):
-            c, value = h_col[r, e], h_val[r, e]
-            for q in range(3):
-                HU[r, q] += value * U[c, q]
-    if not spd_inverse(HU, r_var, m, S_inv, inverse_work):
+                w[_U, r, i] += P[c, i] * value
+    hu00, hu11, hu22 = _hu(w, h_col, h_val, h_cnt, m, 0, 0), _hu(w, h_col, h_val, h_cnt, m, 1, 1), \
+        _hu(w, h_col, h_val, h_cnt, m, 2, 2)
+    hu10, hu20, hu21 = _hu(w, h_col, h_val, h_cnt, m, 1, 0), _hu(w, h_col, h_val, h_cnt, m, 2, 0), \
+        _hu(w, h_col, h_val, h_cnt, m, 2, 1)
+    hu01, hu02, hu12 = _hu(w, h_col, h_val, h_cnt, m, 0, 1), _hu(w, h_col, h_val, h_cnt, m, 0, 2), \
+        _hu(w, h_col, h_val, h_cnt, m, 1, 2)
+    r0, r1, r2 = (r_var[0] if m > 0 else 0.0), (r_var[1] if m > 1 else 0.0), (r_var[2] if m > 2 else 0.0)
+    # S = H U + R, its diagonal padded with ones beyond m
+    ok, i00, i01, i02, i11, i12, i22 = spd_inverse3(hu00 + (r0 if m > 0 else 1.0), hu10, hu11 + (r1 if m > 1 else 1.0),
+                                                    hu20, hu21, hu22 + (r2 if m > 2 else 1.0))
+    if not ok:
         return False
-    for r in range(3):
-        acc = 0.0
-        for q in range(m):
-            acc += S_inv[r, q] * z[q]
-        s[r] = acc
+    # the padding's inverse is the identity: zero it
+    i01, i02, i11, i12, i22 = (i01 if m > 1 else 0.0), (i02 if m > 2 else 0.0), (i11 if m > 1 else 0.0), \
+        (i12 if m > 2 else 0.0), (i22 if m > 2 else 0.0)
+    z0, z1, z2 = (z[0] if m > 0 else 0.0), (z[1] if m > 1 else 0.0), (z[2] if m > 2 else 0.0)
+    s[0] = i00 * z0 + i01 * z1 + i02 * z2
+    s[1] = i01 * z0 + i11 * z1 + i12 * z2
+    s[2] = i02 * z0 + i12 * z1 + i22 * z2
     for i in range(n):
-        u0, u1, u2 = U[i, 0], U[i, 1], U[i, 2]
-        k0 = u0 * S_inv[0, 0] + u1 * S_inv[1, 0] + u2 * S_inv[2, 0]
-        k1 = u0 * S_inv[0, 1] + u1 * S_inv[1, 1] + u2 * S_inv[2, 1]
-        k2 = u0 * S_inv[0, 2] + u1 * S_inv[1, 2] + u2 * S_inv[2, 2]
+        u0, u1, u2 = w[_U, 0, i], w[_U, 1, i], w[_U, 2, i]
+        k0 = u0 * i00 + u1 * i01 + u2 * i02
+        k1 = u0 * i01 + u1 * i11 + u2 * i12
+        k2 = u0 * i02 + u1 * i12 + u2 * i22
+        w[_KT, 0, i], w[_KT, 1, i], w[_KT, 2, i] = k0, k1, k2
         K[i, 0], K[i, 1], K[i, 2] = k0, k1, k2
-        dx[i] = k0 * (z[0] if m > 0 else 0.0) + k1 * (z[1] if m > 1 else 0.0) + k2 * (z[2] if m > 2 else 0.0)
-        V[i, 0] = u0 - (k0 * HU[0, 0] + k1 * HU[1, 0] + k2 * HU[2, 0])
-        V[i, 1] = u1 - (k0 * HU[0, 1] + k1 * HU[1, 1] + k2 * HU[2, 1])
-        V[i, 2] = u2 - (k0 * HU[0, 2] + k1 * HU[1, 2] + k2 * HU[2, 2])
-        W[i, 0] = u0 - k0 * (r_var[0] if m > 0 else 0.0)
-        W[i, 1] = u1 - k1 * (r_var[1] if m > 1 else 0.0)
-        W[i, 2] = u2 - k2 * (r_var[2] if m > 2 else 0.0)
+        dx[i] = k0 * z0 + k1 * z1 + k2 * z2
+        w[_V, 0, i] = u0 - (k0 * hu00 + k1 * hu10 + k2 * hu20)
+        w[_V, 1, i] = u1 - (k0 * hu01 + k1 * hu11 + k2 * hu21)
+        w[_V, 2, i] = u2 - (k0 * hu02 + k1 * hu12 + k2 * hu22)
+        w[_W, 0, i] = u0 - k0 * r0
+        w[_W, 1, i] = u1 - k1 * r1
+        w[_W, 2, i] = u2 - k2 * r2
     for i in range(n):
-        k0, k1, k2 = K[i, 0], K[i, 1], K[i, 2]
-        e0, e1, e2 = V[i, 0], V[i, 1], V[i, 2]
+        k0, k1, k2 = w[_KT, 0, i], w[_KT, 1, i], w[_KT, 2, i]
+        e0, e1, e2 = w[_V, 0, i], w[_V, 1, i], w[_V, 2, i]
         for j in range(i, n):
-            value = P[i, j] - (k0 * W[j, 0] + e0 * K[j, 0] + k1 * W[j, 1] + e1 * K[j, 1]
-                               + k2 * W[j, 2] + e2 * K[j, 2])
-            P[i, j] = value
-            P[j, i] = value
+            P[i, j] = P[i, j] - (k0 * w[_W, 0, j] + e0 * w[_KT, 0, j] + k1 * w[_W, 1, j] + e1 * w[_KT, 1, j]
+                                 + k2 * w[_W, 2, j] + e2 * w[_KT, 2, j])
+    for i in range(n):
+        for j in range(i):
+            P[i, j] = P[j, i]
     return True

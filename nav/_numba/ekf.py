@@ -57,7 +57,7 @@ def initial_covariance_and_noise(n, cfg):
     return P, power
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
     """Write the nominal state into row k of the outputs (the estimates into their only row when they keep the
     final sample's alone: see :func:`filter_run`)."""
@@ -73,7 +73,7 @@ def _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens):
         gsens[e, i] = G[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _inject(dx, n, q, v, p, ba, bg, G):
     """Closed loop: add the error-state estimate dx to the nominal state."""
     for i in range(3):
@@ -100,7 +100,7 @@ def smoother_buffers(records, n, steps):
             np.zeros((records, 3)), np.empty((steps, 3)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _update(k, P, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, work, q, v, p, ba, bg, G, rts, records, count):
     """One Joseph-form update injected into the nominal state, recorded for the smoother when ``rts``.
 
@@ -135,7 +135,8 @@ def filter_run(mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
     it receives every sample in turn and holds the last one's (not with ``rts``, which reads them back). Returns
     the number of measurement updates skipped because the innovation covariance was not positive definite.
 
-    The state count is a constant in each branch: the compiler unrolls and vectorises the block loops for it.
+    The state count is a constant in each branch: the compiler unrolls the block loops for it (for 9 and 15 states
+    they are too short, under 16 iterations, for LLVM to vectorise them).
     """
     if cfg.states == 9:
         return _filter(9, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p0, cfg, rts, quat, vel,

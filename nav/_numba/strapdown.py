@@ -56,7 +56,7 @@ def rk4_increment(h, w0, wm, w1, f0, fm, f1, dq, du, ds):
     ds[2] = h6 * (2.0 * u2[2] + 2.0 * u3[2] + u4[2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apply_increment(q, v, p, dq, du, ds, h, gravity):
     """Advance the nominal state (q, v, p) in place by body increments over an interval of h seconds.
 
@@ -120,7 +120,7 @@ def _corrected_rate(w, bg, G, f):
             w[2] - bg[2] - (G[6] * f[0] + G[7] * f[1] + G[8] * f[2]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def interval_increments(mode, k, t, u_acc, u_gyr, ba, bg, G, dq, du, ds, fhat, weights):
     """Bias-corrected body increments over [t_k, t_k+1]; returns h = t_k+1 - t_k (s).
 
