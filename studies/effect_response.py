@@ -54,8 +54,7 @@ def main(argv: list[str]) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rec, _, ref = att.prepare(blind.blind_recording(sensor, None))
-        workers = att.Workers()
-        simulate = workers.simulate
+        simulate = tw.TwinSimulator()
         measured = att.measure(rec, ref)
         twin = tw.fit_twin(rec, measured.signature, measured.solution, simulate)
         twin_side = att.simulate_side(simulate, twin, measured, False)
