@@ -13,7 +13,9 @@ The magnitude compared is the library's equivalent figure (``expected``): a gyro
 ``accel_gyro_skew`` of -tau (the library's skew samples the gyro later); a first-order low-pass (here the
 exponential smoothing of a sampled RC stage) is named by its cutoff, by any library low-pass (the forms differ
 most above a fifth of the sample rate: a digital Butterworth has a zero at the Nyquist frequency, an analogue
-stage none); a mount rotation about z is ``mount_yaw``. The bias ramp is outside the library: the loop must
+stage none); a mount rotation about z is the change of the sensor's yaw on the foot, which the twin's mount
+fit finds before any effect (:func:`gaitsim.loop.mount_fit.fit_yaw`) and the ``mount_yaw`` effect adds to
+(:func:`mount_yaw`). The bias ramp is outside the library: the loop must
 leave it unexplained.
 
 The same injections also go into shared measured recordings (:data:`MEASURED`: x-io's short walk, a walker the
@@ -163,6 +165,11 @@ def equivalent_effects(result: attribution.LoopResult) -> dict:
     return {e["effect"]: e["magnitude"] for a in result.attributions for e in a.get("equivalent", [])}
 
 
+def mount_yaw(result: attribution.LoopResult) -> float:
+    """The sensor's yaw on the foot (deg) in the final twin: the twin's mount fit plus any ``mount_yaw`` named."""
+    return math.degrees(result.twin_after.scenario.sensor["mounting_misalignment"][2])
+
+
 def unexplained(result: attribution.LoopResult) -> list:
     """The residuals the loop left unexplained."""
     return [a["residual"] for a in result.attributions if a["effect"] == "unexplained"]
@@ -183,6 +190,8 @@ def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribut
                 if name not in before or abs(m - before[name]) > settings.BLIND_MAGNITUDE_TOLERANCE * abs(before[name])}
 
     new, alternatives = beyond(named_effects(result)), beyond(equivalent_effects(result))
+    if "mount_yaw" in case.named:  # a yaw is found by the twin's mount fit, or named beyond it
+        new["mount_yaw"] = mount_yaw(result) - mount_yaw(untouched)
     left = [name for name in unexplained(result) if name not in unexplained(untouched)]
     row = {"case": case.name, "injected": case.magnitude, "unit": case.unit, "expected_effect": "/".join(case.named),
            "expected_magnitude": case.expected, "named_beyond_untouched": new,

@@ -1,5 +1,12 @@
-"""Where the sensor sits on the foot: its height read from the push-off, its position along the foot fitted to the
-recording's accelerometer profiles.
+"""How the sensor sits on the foot: its yaw read from the swing axis, its height read from the push-off, its
+position along the foot fitted to the recording's accelerometer profiles.
+
+The yaw (:func:`fit_yaw`) is the angle about the sensor's z between the sensor's x and the foot's. The foot
+swings about its lateral axis, so a yaw of the sensor turns the dominant rotation axis of each stride, as the
+sensor sees it, by the same angle (``swing_axis_yaw``; tests/test_loop_residuals.py); what the twin's own foot
+adds (its stance roll and swing yaw) is in both the recording and the twin and cancels in the difference. Fitted
+first, before the profiles below (the yaw mixes the accelerometer's x and y) and before any effect: a sensor
+turned on the shoe is part of the twin, like its roll and pitch read from gravity, not an error to be found.
 
 The height is the push-off's reading (:func:`gaitsim.loop.push_off.push_off_height`: the lever of a rigid turn
 about the still toe contact, from the recording's own gyro and accelerometer), which the twin's swing, gait shape
@@ -47,6 +54,36 @@ def contact_phases(heel_rocker_frac: float, foot_flat_frac: float, push_off_frac
     foot flat and push-off [0, foot flat + push-off] and the heel rocker [1 - heel rocker, 1)."""
     phase = np.linspace(0.0, 1.0, settings.PHASE_POINTS, endpoint=False)
     return (phase <= foot_flat_frac + push_off_frac) | (phase >= 1.0 - heel_rocker_frac)
+
+
+def fit_yaw(measured: Signature, simulate_with_yaw) -> tuple[float, dict]:
+    """Yaw (deg) of the sensor on the foot that puts the twin's swing axis where the recording's is.
+
+    Each of ``settings.YAW_ITERATIONS`` steps adds the remaining ``swing_axis_yaw`` difference (recording minus
+    twin) to the yaw; a second step takes up what the mount's roll and pitch make of a turn about the sensor's z.
+
+    Parameters
+    ----------
+    measured : the recording's signature.
+    simulate_with_yaw : yaw (deg) -> simulated :class:`nav.recording.Recording` of the twin with that sensor yaw.
+
+    Returns
+    -------
+    yaw : deg, within ``settings.YAW_BOUND_DEG`` (beyond it the frame check calls it a frame, not a mount).
+    quality : the recording's swing-axis yaw and its standard error, and the twin's at zero and at the fitted yaw (deg).
+    """
+    bound = settings.YAW_BOUND_DEG
+    target = measured.scalars["swing_axis_yaw"]
+    yaw, seen = 0.0, []
+    for _ in range(settings.YAW_ITERATIONS + 1):
+        sim = simulate_with_yaw(yaw)
+        seen.append(signature(sim.t, sim.acc, sim.gyr).scalars["swing_axis_yaw"].value)
+        if len(seen) > settings.YAW_ITERATIONS:
+            break
+        yaw = float(np.clip(yaw + target.value - seen[-1], -bound, bound))
+    return yaw, {"yaw_deg": yaw, "recording_swing_axis_yaw_deg": target.value,
+                 "recording_swing_axis_yaw_se_deg": target.se, "twin_swing_axis_yaw_at_zero_yaw_deg": seen[0],
+                 "twin_swing_axis_yaw_at_fitted_yaw_deg": seen[-1]}
 
 
 def fit_lever_arm(measured: Signature, simulate_at, phases: np.ndarray, height_m: float = math.nan

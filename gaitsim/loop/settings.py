@@ -87,6 +87,8 @@ PITCH_FIT_BOUNDS = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", 
 
 # -- sensor position on the foot (gaitsim.loop.mount_fit) ----------------------------------------------------
 PROBE_M = 0.1  # m, how far each probe moves the IMU site
+YAW_ITERATIONS = 2  # steps of the twin's mount-yaw fit (mount_fit.fit_yaw)
+YAW_BOUND_DEG = 45.0  # deg, largest mount yaw; beyond it an axis of the frame check (frame.py) changes
 SITE_BOUNDS_M = ((-0.08, -0.07, 0.0), (0.25, 0.07, 0.12))  # m, foot frame from the heel contact
 
 # -- effects (gaitsim.loop.effects) --------------------------------------------------------------------------

@@ -23,9 +23,9 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
   about a ground contact (linear least squares over three simulations).
 - **Foot side.** The stance model's roll (pronation) is a left foot's and is mirrored for a right foot: the twin
   is a right foot when the recording's mean core-stance roll rate (``stance_rate_x``) is negative.
-- **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window,
-  written as the sensor's ``mounting_misalignment`` (roll, pitch, 0); the library's ``mount_yaw`` effect
-  fits the remaining yaw.
+- **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window, and
+  its yaw from the swing axis (:func:`gaitsim.loop.mount_fit.fit_yaw`, before the sensor position), written as
+  the sensor's ``mounting_misalignment`` (roll, pitch, yaw); the library's ``mount_yaw`` effect adds to that yaw.
 - **Sensor noise and gyro bias**: white-noise densities std / sqrt(rate) per axis from the quietest
   ``settings.QUIET_WINDOW_S`` of the recording, and the mean angular rate over every detected rest as the gyro
   bias. :func:`match_noise` rescales the densities so that the twin's *output* has the recording's static standard deviation (once effects such as
@@ -243,7 +243,7 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
                    "accel_noise_density": [(acc_sd / math.sqrt(rate)).tolist(), "m/s^2/sqrt(Hz)"],
                    "gyro_noise_density": [(gyr_sd / math.sqrt(rate)).tolist(), "rad/s/sqrt(Hz)"],
                    "gyro_bias": [_rest_gyro_mean(rec, stationary, (q0, q1)).tolist(), "rad/s"],
-                   "mounting_misalignment": [[math.degrees(roll), math.degrees(pitch), 0.0], "deg"]},
+                   **_mount_angles(roll, pitch, 0.0)["sensor"]},
     }
     shape, shape_quality = gait_fit.fit_pitch_profile(gait_fit.stride_profile(rec.t, rec.acc, rec.gyr, sig),
                                                       fill(GaitParams, doc["gait"], "<twin> [gait]"), ImpactParams())
@@ -253,6 +253,8 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
                  measured_statistics=measured, gait_shape_fit=shape_quality, track=source, path=path_note,
                  stride_length_m=stride_length, quiet_window_s=[float(rec.t[q0]), float(rec.t[q1 - 1])])
     twin = Twin(scenario_from_dict(doc, "<twin>"), notes)
+    yaw, yaw_quality = mount_fit.fit_yaw(sig, lambda y: simulate(twin.with_changes(_mount_angles(roll, pitch, y))))
+    twin = twin.with_changes(_mount_angles(roll, pitch, yaw))
     gait = twin.scenario.walk.gait
     phases = mount_fit.contact_phases(gait.heel_rocker_frac, gait.foot_flat_frac, gait.push_off_frac)
     lag = sig.scalars["acc_gyro_lag"].value
@@ -260,13 +262,18 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
     site, site_quality = mount_fit.fit_lever_arm(
         sig, lambda r: simulate(twin.with_changes({"mount": mount_table(r)})), phases, height)
     twin = twin.with_changes({"mount": mount_table(site)})
-    twin.notes["mount_fit"] = {**site_quality, "push_off_height_m": height, "push_off_height_se_m": height_se,
+    twin.notes["mount_fit"] = {**site_quality, **yaw_quality, "push_off_height_m": height, "push_off_height_se_m": height_se,
                                "push_off_ahead_of_pivot_m": ahead}
     twin = match_noise(twin, simulate)
     for _ in range(settings.FIT_ITERATIONS):
         twin = _correct(twin, measured, simulate)
     twin.notes["twin_statistics"] = _twin_statistics(twin, measured, simulate)
     return twin
+
+
+def _mount_angles(roll: float, pitch: float, yaw_deg: float) -> dict:
+    """A [sensor] table turning the sensor on the foot by ``roll``, ``pitch`` (rad) and ``yaw_deg`` (deg)."""
+    return {"sensor": {"mounting_misalignment": [[math.degrees(roll), math.degrees(pitch), yaw_deg], "deg"]}}
 
 
 def mount_table(site: np.ndarray) -> dict:
