@@ -17,7 +17,7 @@ from gaitsim.simulate import simulate_walk
 def fitted():
     doc = {"path": {"kind": "polyline", "waypoints_m": [[0, 0], [10, 0], [10, 6]], "corner_radius_m": 1.0},
            "sampling": {"rate_hz": 200.0}, "sensor": {"preset": "vn200", "withhold": True,
-                      "mounting_misalignment": [[12.0, -8.0, 0.0], "deg"]},
+                      "mounting_misalignment": [[12.0, -8.0, 10.0], "deg"]},
            "gait": {"cadence_steps_per_min": 100.0, "stride_length_m": 1.25, "pitch_toe_off_deg": 55.0},
            }
     rec = as_measured(simulate_walk(scenario_from_dict(doc), seed=5), reference_rate_hz=100.0)
@@ -32,13 +32,18 @@ def test_measured_recording_carries_no_gait_or_sensor_parameters(fitted):
     assert set(rec.meta) == {"sampling", "reference"}
 
 
-def test_cadence_stride_length_and_mount_tilt_are_recovered(fitted):
+def test_cadence_stride_length_and_mount_are_recovered(fitted):
     _, fit = fitted
     gait = fit.document()["gait"]
     assert gait["cadence_steps_per_min"] == pytest.approx(100.0, rel=0.02)
     assert gait["stride_length_m"] == pytest.approx(1.25, rel=0.03)
-    roll, pitch, _ = np.degrees(fit.scenario.sensor["mounting_misalignment"])
+    roll, pitch, yaw = np.degrees(fit.scenario.sensor["mounting_misalignment"])
     assert roll == pytest.approx(12.0, abs=0.5) and pitch == pytest.approx(-8.0, abs=0.5)
+    quality = fit.notes["mount_fit"]
+    assert yaw == pytest.approx(10.0, abs=max(0.5, 3 * quality["recording_swing_axis_yaw_se_deg"]))
+    # the fitted twin's swing axis is the recording's (the yaw fit's own criterion, to its iteration)
+    assert quality["twin_swing_axis_yaw_at_fitted_yaw_deg"] == pytest.approx(quality["recording_swing_axis_yaw_deg"],
+                                                                              abs=0.2)
 
 
 def test_the_turn_becomes_a_polyline_of_the_walked_length(fitted):

@@ -166,8 +166,9 @@ def equivalent_effects(result: attribution.LoopResult) -> dict:
 
 
 def mount_yaw(result: attribution.LoopResult) -> float:
-    """The sensor's yaw on the foot (deg) in the final twin: the twin's mount fit plus any ``mount_yaw`` named."""
-    return math.degrees(result.twin_after.scenario.sensor["mounting_misalignment"][2])
+    """The sensor's yaw on the foot (deg): the twin's mount fit plus the ``mount_yaw`` the loop named, if any."""
+    fitted = math.degrees(result.twin_before.scenario.sensor["mounting_misalignment"][2])
+    return fitted + named_effects(result).get("mount_yaw", 0.0)
 
 
 def unexplained(result: attribution.LoopResult) -> list:
@@ -190,8 +191,9 @@ def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribut
                 if name not in before or abs(m - before[name]) > settings.BLIND_MAGNITUDE_TOLERANCE * abs(before[name])}
 
     new, alternatives = beyond(named_effects(result)), beyond(equivalent_effects(result))
-    if "mount_yaw" in case.named:  # a yaw is found by the twin's mount fit, or named beyond it
-        new["mount_yaw"] = mount_yaw(result) - mount_yaw(untouched)
+    turned = mount_yaw(result) - mount_yaw(untouched)
+    if "mount_yaw" in case.named and turned:  # a yaw is found by the twin's mount fit, or named beyond it
+        new["mount_yaw"] = turned
     left = [name for name in unexplained(result) if name not in unexplained(untouched)]
     row = {"case": case.name, "injected": case.magnitude, "unit": case.unit, "expected_effect": "/".join(case.named),
            "expected_magnitude": case.expected, "named_beyond_untouched": new,
