@@ -20,7 +20,9 @@
    move them, so they are acted on only when no diagnostic of one effect is left (an effect found there must
    still leave every signature residual it moves at the noise level). Never acted on (but reported, and used
    in the fits of effects that move them): ``settings.DERIVED`` residuals (``stance_shoe`` is a function of the stance
-   gyro and accelerometer residuals).
+   gyro and accelerometer residuals) and ``settings.REFITTED`` ones, which the twin's own fit closes again after
+   every added effect (``swing_axis_yaw``: the sensor's yaw on the foot, :func:`gaitsim.loop.twin.refit_yaw`;
+   a change of the foot's stance motion turns the swing axis too), so that no effect harms them either.
    Each effect's magnitude is fitted by minimising ``Q = sum z_i^2`` over the residuals the effect moves,
    with a grid of ``settings.GRID_POINTS`` values plus a bounded Brent refinement, re-simulating the twin each time
    (with its noise re-matched to the recording's static noise, :func:`gaitsim.loop.twin.match_noise`).
@@ -321,7 +323,7 @@ def judged(fit: Fit, base: dict, acted: str) -> Fit:
     res = fit.residuals
     before, after = abs(base[acted].value), abs(res[acted].value) if acted in res else math.inf
     fraction = 1.0 - after / before if before > 0 else 0.0
-    harmed = tuple(n for n in res if n != acted and n in base
+    harmed = tuple(n for n in res if n != acted and n in base and n not in settings.REFITTED
                    and base[n].z <= settings.NOISE_LEVEL < res[n].z / settings.HARM_FACTOR)
     return dataclasses.replace(fit, fraction=float(fraction), harmed=harmed,
                                closes_acted=bool(acted in res and res[acted].at_noise_level
@@ -472,7 +474,7 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
     while len(used) < max_effects:
         round_number += 1
         ranked = sorted((r for r in current.values() if r.name not in acted_names
-                         and r.name not in settings.DERIVED and r.z > settings.NOISE_LEVEL),
+                         and r.name not in settings.DERIVED + settings.REFITTED and r.z > settings.NOISE_LEVEL),
                         key=lambda r: (r.name.startswith("nav_"), -r.z))
         if not ranked:
             break
@@ -500,7 +502,7 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
         if accepted:
             used.add(best.effect.name)
             fitted = {}
-            current_twin = tw.match_noise(current_twin.with_changes(best.changes), simulate)
+            current_twin = tw.with_effect(current_twin, best.changes, measured.signature, simulate)
             current_side = simulate_side(simulate, current_twin, measured, True)
             current = compare(measured, current_side, noise)
     return LoopResult(measured, base_twin, current_twin, before, current_side, first, current, attributions,

@@ -166,9 +166,9 @@ def equivalent_effects(result: attribution.LoopResult) -> dict:
 
 
 def mount_yaw(result: attribution.LoopResult) -> float:
-    """The sensor's yaw on the foot (deg): the twin's mount fit plus the ``mount_yaw`` the loop named, if any."""
-    fitted = math.degrees(result.twin_before.scenario.sensor["mounting_misalignment"][2])
-    return fitted + named_effects(result).get("mount_yaw", 0.0)
+    """The sensor's yaw on the foot (deg) in the final twin: the twin's mount fit (re-fitted after each effect)
+    plus the ``mount_yaw`` the loop named, if any."""
+    return math.degrees(result.twin_after.scenario.sensor["mounting_misalignment"][2])
 
 
 def unexplained(result: attribution.LoopResult) -> list:

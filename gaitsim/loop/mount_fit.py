@@ -56,7 +56,7 @@ def contact_phases(heel_rocker_frac: float, foot_flat_frac: float, push_off_frac
     return (phase <= foot_flat_frac + push_off_frac) | (phase >= 1.0 - heel_rocker_frac)
 
 
-def fit_yaw(measured: Signature, simulate_with_yaw) -> tuple[float, dict]:
+def fit_yaw(measured: Signature, simulate_with_yaw, start_deg: float = 0.0) -> tuple[float, dict]:
     """Yaw (deg) of the sensor on the foot that puts the twin's swing axis where the recording's is.
 
     Each of ``settings.YAW_ITERATIONS`` steps adds the remaining ``swing_axis_yaw`` difference (recording minus
@@ -66,15 +66,17 @@ def fit_yaw(measured: Signature, simulate_with_yaw) -> tuple[float, dict]:
     ----------
     measured : the recording's signature.
     simulate_with_yaw : yaw (deg) -> simulated :class:`nav.recording.Recording` of the twin with that sensor yaw.
+    start_deg : deg, the yaw the steps start from (the twin's current one when it is re-fitted).
 
     Returns
     -------
     yaw : deg, within ``settings.YAW_BOUND_DEG`` (beyond it the frame check calls it a frame, not a mount).
-    quality : the recording's swing-axis yaw and its standard error, and the twin's at zero and at the fitted yaw (deg).
+    quality : the recording's swing-axis yaw and its standard error, and the twin's at the start and at the fitted
+        yaw (deg).
     """
     bound = settings.YAW_BOUND_DEG
     target = measured.scalars["swing_axis_yaw"]
-    yaw, seen = 0.0, []
+    yaw, seen = float(start_deg), []
     for _ in range(settings.YAW_ITERATIONS + 1):
         sim = simulate_with_yaw(yaw)
         seen.append(signature(sim.t, sim.acc, sim.gyr).scalars["swing_axis_yaw"].value)
@@ -82,7 +84,7 @@ def fit_yaw(measured: Signature, simulate_with_yaw) -> tuple[float, dict]:
             break
         yaw = float(np.clip(yaw + target.value - seen[-1], -bound, bound))
     return yaw, {"yaw_deg": yaw, "recording_swing_axis_yaw_deg": target.value,
-                 "recording_swing_axis_yaw_se_deg": target.se, "twin_swing_axis_yaw_at_zero_yaw_deg": seen[0],
+                 "recording_swing_axis_yaw_se_deg": target.se, "twin_swing_axis_yaw_at_start_deg": seen[0],
                  "twin_swing_axis_yaw_at_fitted_yaw_deg": seen[-1]}
 
 

@@ -90,9 +90,10 @@ def compare(measured: Signature, twin: Signature, floors: dict | None = None) ->
 
 def signature_misfit(res: dict) -> float:
     """Sum of z^2 over the signature residuals of ``res`` (name -> :class:`Residual`) with a finite z:
-    navigation and ``settings.DERIVED`` left out. The misfit the loop minimises and the held-out check scores."""
-    return float(sum(r.z ** 2 for name, r in res.items()
-                     if not name.startswith("nav_") and name not in settings.DERIVED and math.isfinite(r.z)))
+    navigation, ``settings.DERIVED`` and ``settings.REFITTED`` (closed by the twin's own fit) left out. The misfit
+    the loop minimises and the held-out check scores."""
+    return float(sum(r.z ** 2 for name, r in res.items() if not name.startswith("nav_") and name not in
+                     settings.DERIVED + settings.REFITTED and math.isfinite(r.z)))
 
 
 def profile_fit(measured: Signature, twin: Signature, factor: float = settings.PROFILE_SPREAD_FACTOR) -> dict:

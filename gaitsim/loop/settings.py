@@ -105,6 +105,8 @@ NAV_FLOOR = {"nav_length_ratio": 0.003, "nav_heading_drift": 0.01, "nav_final_er
 HARM_FACTOR = 2.0  # 1, an effect harms a residual at the noise level that it pushes beyond this x NOISE_LEVEL
 EXPLAINED_FRACTION = 0.5  # 1, least share of the acted residual an accepted effect explains
 DERIVED = ("stance_shoe",)  # residuals never acted on (functions of others)
+REFITTED = ("swing_axis_yaw",)  # residuals the twin's own fit closes again after each added effect (the sensor's
+# yaw on the foot, twin.refit_yaw): never acted on, outside the misfit, harmed by no effect
 MAX_EFFECTS = 6  # effects added to a twin per recording at most (a residual left unexplained costs none)
 GRID_POINTS = 7  # grid of each effect's magnitude search before the Brent refinement
 BRENT_ITERATIONS = 8  # iterations of the bounded Brent refinement

@@ -81,12 +81,13 @@ def transferred_score(target: att.LoopResult, effects: list[tuple[str, float]], 
 
 def with_effects(target: att.LoopResult, effects: list[tuple[str, float]],
                  simulate: tw.TwinSimulator) -> tw.Twin:
-    """The target's default twin with ``effects`` added in order, each in the context of the twin so far."""
+    """The target's default twin with ``effects`` added in order, each in the context of the twin so far and as
+    the loop adds it (:func:`gaitsim.loop.twin.with_effect`)."""
     twin = target.twin_before
     for name, magnitude in effects:
         scenario_side = att.simulate_side(simulate, twin, target.measured, False)
         ctx = fx.context(target.measured.recording, twin.scenario, target.measured.signature, scenario_side.signature)
-        twin = tw.match_noise(twin.with_changes(fx.BY_NAME[name].changes(magnitude, ctx)), simulate)
+        twin = tw.with_effect(twin, fx.BY_NAME[name].changes(magnitude, ctx), target.measured.signature, simulate)
     return twin
 
 

@@ -24,8 +24,9 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
 - **Foot side.** The stance model's roll (pronation) is a left foot's and is mirrored for a right foot: the twin
   is a right foot when the recording's mean core-stance roll rate (``stance_rate_x``) is negative.
 - **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window, and
-  its yaw from the swing axis (:func:`gaitsim.loop.mount_fit.fit_yaw`, before the sensor position), written as
-  the sensor's ``mounting_misalignment`` (roll, pitch, yaw); the library's ``mount_yaw`` effect adds to that yaw.
+  its yaw from the swing axis (:func:`refit_yaw`, before the sensor position, and again after every effect the
+  loop adds), written as the sensor's ``mounting_misalignment`` (roll, pitch, yaw); the library's ``mount_yaw``
+  effect adds to that yaw.
 - **Sensor noise and gyro bias**: white-noise densities std / sqrt(rate) per axis from the quietest
   ``settings.QUIET_WINDOW_S`` of the recording, and the mean angular rate over every detected rest as the gyro
   bias. :func:`match_noise` rescales the densities so that the twin's *output* has the recording's static standard deviation (once effects such as
@@ -252,9 +253,7 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
     notes.update(static_std={"acc_mps2": acc_sd.tolist(), "gyr_rad_s": gyr_sd.tolist()},
                  measured_statistics=measured, gait_shape_fit=shape_quality, track=source, path=path_note,
                  stride_length_m=stride_length, quiet_window_s=[float(rec.t[q0]), float(rec.t[q1 - 1])])
-    twin = Twin(scenario_from_dict(doc, "<twin>"), notes)
-    yaw, yaw_quality = mount_fit.fit_yaw(sig, lambda y: simulate(twin.with_changes(_mount_angles(roll, pitch, y))))
-    twin = twin.with_changes(_mount_angles(roll, pitch, yaw))
+    twin, yaw_quality = refit_yaw(Twin(scenario_from_dict(doc, "<twin>"), notes), sig, simulate)
     gait = twin.scenario.walk.gait
     phases = mount_fit.contact_phases(gait.heel_rocker_frac, gait.foot_flat_frac, gait.push_off_frac)
     lag = sig.scalars["acc_gyro_lag"].value
@@ -269,6 +268,23 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
         twin = _correct(twin, measured, simulate)
     twin.notes["twin_statistics"] = _twin_statistics(twin, measured, simulate)
     return twin
+
+
+def refit_yaw(twin: Twin, measured: Signature, simulate: TwinSimulator) -> tuple[Twin, dict]:
+    """``twin`` with the sensor's yaw on the foot fitted to the recording's swing axis from its current yaw
+    (:func:`gaitsim.loop.mount_fit.fit_yaw`), and what the fit did. Done in the fit and again after every effect
+    the loop adds: a change of the foot's motion (its stance rates, say) turns the swing axis as well."""
+    roll, pitch, yaw = twin.scenario.sensor["mounting_misalignment"]
+    fitted, quality = mount_fit.fit_yaw(
+        measured, lambda y: simulate(twin.with_changes(_mount_angles(roll, pitch, y))), math.degrees(yaw))
+    return twin.with_changes(_mount_angles(roll, pitch, fitted)), quality
+
+
+def with_effect(twin: Twin, changes: dict, measured: Signature, simulate: TwinSimulator) -> Twin:
+    """``twin`` with an effect's scenario ``changes`` added, as the loop adds it: the yaw re-fitted to the
+    recording's swing axis (:func:`refit_yaw`), then the noise re-matched (:func:`match_noise`)."""
+    changed, _ = refit_yaw(twin.with_changes(changes), measured, simulate)
+    return match_noise(changed, simulate)
 
 
 def _mount_angles(roll: float, pitch: float, yaw_deg: float) -> dict:
