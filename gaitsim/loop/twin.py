@@ -261,8 +261,8 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
     site, site_quality = mount_fit.fit_lever_arm(
         sig, lambda r: simulate(twin.with_changes({"mount": mount_table(r)})), phases, height)
     twin = twin.with_changes({"mount": mount_table(site)})
-    twin.notes["mount_fit"] = {**site_quality, **yaw_quality, "push_off_height_m": height, "push_off_height_se_m": height_se,
-                               "push_off_ahead_of_pivot_m": ahead}
+    twin.notes["mount_fit"] = {**site_quality, **yaw_quality, "push_off_height_m": height,
+                               "push_off_height_se_m": height_se, "push_off_ahead_of_pivot_m": ahead}
     twin = match_noise(twin, simulate)
     for _ in range(settings.FIT_ITERATIONS):
         twin = _correct(twin, measured, simulate)
