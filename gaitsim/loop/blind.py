@@ -13,10 +13,10 @@ The magnitude compared is the library's equivalent figure (``expected``): a gyro
 ``accel_gyro_skew`` of -tau (the library's skew samples the gyro later); a first-order low-pass (here the
 exponential smoothing of a sampled RC stage) is named by its cutoff, by any library low-pass (the forms differ
 most above a fifth of the sample rate: a digital Butterworth has a zero at the Nyquist frequency, an analogue
-stage none); a mount rotation about z is the change of the sensor's yaw on the foot, which the twin's mount
-fit finds before any effect (:func:`gaitsim.loop.mount_fit.fit_yaw`) and the ``mount_yaw`` effect adds to
-(:func:`mount_yaw`). The bias ramp is outside the library: the loop must
-leave it unexplained.
+stage none); a mount rotation about z is the change of the sensor's yaw on the foot in the final twin
+(:data:`TWIN_YAW`, :func:`twin_yaw`), which the twin's mount fit finds before any effect and again after each
+(:func:`gaitsim.loop.mount_fit.fit_yaw`). The bias ramp is outside the library: the loop must leave it
+unexplained.
 
 The same injections also go into shared measured recordings (:data:`MEASURED`: x-io's short walk, a walker the
 stance model was never fitted to, and gaitmap's right foot: real feet the twin reproduces only in part, with their
@@ -43,6 +43,7 @@ from ..simulate import simulate_walk
 from . import attribution, settings
 
 SENSORS = ("paper-vn200", "bmi160")
+TWIN_YAW = "twin_yaw"  # what a mount rotation about z is found as: the twin's fitted yaw on the foot, not an effect
 MEASURED = ("xio-ngimu/short_walk", "gaitmap-healthy/right")  # dataset/recording of the shared data
 
 
@@ -111,7 +112,7 @@ CASES = (
     BlindCase("g_sensitivity", g_sensitivity, 0.02, "deg/s/(m/s^2)", ("g_sensitivity",), 0.02),
     BlindCase("gyro_scale_y", gyro_scale_y, 2.0, "%", ("gyro_scale_y",), 2.0),
     BlindCase("accel_scale_x", accel_scale_x, 2.0, "%", ("accel_scale_x",), 2.0),
-    BlindCase("mount_yaw", mount_yaw, 6.0, "deg", ("mount_yaw",), 6.0),
+    BlindCase("mount_yaw", mount_yaw, 6.0, "deg", (TWIN_YAW,), 6.0),
     BlindCase("gyro_bias_ramp", gyro_bias_ramp, 0.5, "deg/s", ("unexplained",), math.nan),
 )
 BY_NAME = {c.name: c for c in CASES}
@@ -165,9 +166,8 @@ def equivalent_effects(result: attribution.LoopResult) -> dict:
     return {e["effect"]: e["magnitude"] for a in result.attributions for e in a.get("equivalent", [])}
 
 
-def mount_yaw(result: attribution.LoopResult) -> float:
-    """The sensor's yaw on the foot (deg) in the final twin: the twin's mount fit (re-fitted after each effect)
-    plus the ``mount_yaw`` the loop named, if any."""
+def twin_yaw(result: attribution.LoopResult) -> float:
+    """The sensor's yaw on the foot (deg) in the final twin: its mount fit, re-fitted after each effect."""
     return math.degrees(result.twin_after.scenario.sensor["mounting_misalignment"][2])
 
 
@@ -191,9 +191,9 @@ def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribut
                 if name not in before or abs(m - before[name]) > settings.BLIND_MAGNITUDE_TOLERANCE * abs(before[name])}
 
     new, alternatives = beyond(named_effects(result)), beyond(equivalent_effects(result))
-    turned = mount_yaw(result) - mount_yaw(untouched)
-    if "mount_yaw" in case.named and turned:  # a yaw is found by the twin's mount fit, or named beyond it
-        new["mount_yaw"] = turned
+    turned = twin_yaw(result) - twin_yaw(untouched)
+    if TWIN_YAW in case.named and turned:  # a yaw is found by the twin's mount fit
+        new[TWIN_YAW] = turned
     left = [name for name in unexplained(result) if name not in unexplained(untouched)]
     row = {"case": case.name, "injected": case.magnitude, "unit": case.unit, "expected_effect": "/".join(case.named),
            "expected_magnitude": case.expected, "named_beyond_untouched": new,

@@ -15,7 +15,6 @@ re-run the sensor model on the cached walk).
 | impact_ringing | [impact] ringing_accel_mps2 (ringing_hz from the residual spectrum) | m/s^2 | onset_hf, hf40, hf80, acc_peak, stance_acc_spread, stance_duration |
 | bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
-| mount_yaw | [sensor] mounting_misalignment (yaw), added to the twin's fitted yaw | deg | swing_axis_yaw, profile_gyr_x, profile_acc_y |
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | bandwidth_analogue | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1, filter_kind = "analogue" | Hz | as bandwidth |
 | gyro_scale_x, _y, _z | [sensor] gyro_misalignment, one row x (1 + s) | % | stride closure, gyro profiles, navigation |
@@ -254,12 +253,6 @@ LIBRARY: tuple[Effect, ...] = (
            "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES + CLOSURE, (-20.0, 20.0),
            lambda m, ctx: _sensor(accel_gyro_skew=[m, "ms"]),
            lambda res, ctx: None if _value(res, "acc_gyro_lag") is None else -_value(res, "acc_gyro_lag")),
-    Effect("mount_yaw", "yaw of the sensor axes on the foot beyond the twin's mount fit (added to its yaw)",
-           "[sensor] mounting_misalignment (yaw)", "deg", ("swing_axis_yaw", "profile_gyr_x", "profile_acc_y"),
-           (-30.0, 30.0),
-           lambda m, ctx: _sensor(mounting_misalignment=[[*ctx["mount_roll_pitch_rad"],
-                                                          ctx["mount_yaw_rad"] + math.radians(m)], "rad"]),
-           lambda res, ctx: _value(res, "swing_axis_yaw")),
     *(Effect(f"{sensor}_scale_{axis}", f"{label} scale factor error of the sensor's {axis} axis alone",
              f"[sensor] {sensor}_misalignment[{i}][{i}]", "%", CLOSURE + profiles + NAV + extra, (-6.0, 6.0),
              lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}))

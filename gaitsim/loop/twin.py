@@ -25,8 +25,8 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
   is a right foot when the recording's mean core-stance roll rate (``stance_rate_x``) is negative.
 - **Mount.** Roll and pitch of the sensor on the foot from the mean specific force at the quietest window, and
   its yaw from the swing axis (:func:`refit_yaw`, before the sensor position, and again after every effect the
-  loop adds), written as the sensor's ``mounting_misalignment`` (roll, pitch, yaw); the library's ``mount_yaw``
-  effect adds to that yaw.
+  loop adds), written as the sensor's ``mounting_misalignment`` (roll, pitch, yaw). The yaw is the twin's, not an
+  effect of the library: an added yaw would be undone by the re-fit after it.
 - **Sensor noise and gyro bias**: white-noise densities std / sqrt(rate) per axis from the quietest
   ``settings.QUIET_WINDOW_S`` of the recording, and the mean angular rate over every detected rest as the gyro
   bias. :func:`match_noise` rescales the densities so that the twin's *output* has the recording's static standard deviation (once effects such as
