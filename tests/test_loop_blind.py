@@ -31,9 +31,12 @@ def untouched(sensor: str):
 
 
 def verdict(sensor: str, case: blind.BlindCase) -> dict:
+    """The row of the blind table: the case judged against the untouched run's named and estimated effects."""
     key = (sensor, case.name)
     if key not in _VERDICTS:
-        _VERDICTS[key] = blind.verdict(case, blind.run(sensor, case), untouched(sensor))
+        result = blind.run(sensor, case)
+        _VERDICTS[key] = blind.verdict(case, result, untouched(sensor),
+                                       blind.untouched_estimates(case, result, untouched(sensor)))
     return _VERDICTS[key]
 
 
@@ -88,6 +91,19 @@ def test_a_gyro_delay_injected_by_numpy_is_named_as_a_skew_of_its_size(sensor):
     row = verdict(sensor, blind.BY_NAME["gyro_delay"])
     assert row["found_as"] == "named" and row["found_effect"] == "accel_gyro_skew", row
     assert row["found_magnitude"] == pytest.approx(-4.0, rel=0.25)
+
+
+def test_an_extra_g_sensitivity_is_the_change_from_what_the_sensors_own_anisotropic_g_sensitivity_reads_as():
+    """paper-vn200's own G_g (G_xx +0.0041, G_zz -0.0022 deg/s/(m/s^2)) turns the stride's roll closure as an
+    isotropic k of about 0.02 would (the isotropic effect's x and z paths nearly cancel in roll), too little to
+    be named on the untouched walk alone. With 0.02 more on every axis the loop names about twice that; the
+    case is credited with the change of the loop's estimate, which must be the injected 0.02 within 25 %."""
+    row = verdict("paper-vn200", blind.BY_NAME["g_sensitivity"])
+    own = row["untouched_estimated"]["g_sensitivity"]
+    largest = np.degrees(np.abs(get_preset("paper-vn200").parameters["gyro_g_sensitivity"])).max()
+    assert own > 2 * largest, row  # the projection of the anisotropic matrix exceeds every element of it
+    assert (row["found_as"], row["found_effect"]) == ("named", "g_sensitivity"), row
+    assert row["found_magnitude"] == pytest.approx(0.02, rel=0.25)
 
 
 def test_one_case_of_the_committed_blind_table_is_what_the_code_gives():
@@ -153,5 +169,12 @@ def test_an_injected_effect_that_only_fits_as_well_as_the_named_one_is_not_count
     row = blind.verdict(mount, _result(other_family, yaw_deg=-15.5), _result(yaw_deg=-21.0))
     assert row["found"] and row["found_magnitude"] == pytest.approx(5.5)
     assert not blind.verdict(mount, _result(yaw_deg=-18.0), _result(yaw_deg=-21.0))["found"]  # 3 deg: 50 % off
+    # the change from the untouched run's estimate of an effect it did not name counts, the estimate alone not
+    g_sensitivity = blind.BY_NAME["g_sensitivity"]
+    doubled = {"effect": "g_sensitivity", "magnitude": 0.044, "residual": "closure_roll", "equivalent": []}
+    row = blind.verdict(g_sensitivity, _result(doubled), untouched, {"g_sensitivity": 0.0215})
+    assert row["found"] and row["found_magnitude"] == pytest.approx(0.0225) and not row["found_subtracting_named"]
+    assert not blind.verdict(g_sensitivity, _result(doubled), untouched)["found"]  # 0.044 for 0.02
+    assert not blind.verdict(g_sensitivity, _result(doubled), untouched, {"g_sensitivity": 0.04})["found"]
     # a yaw the twin's fit moved does not count for another case
     assert blind.TWIN_YAW not in blind.verdict(low_pass, _result(yaw_deg=3.0), untouched)["named_beyond_untouched"]

@@ -9,6 +9,15 @@ a ``settings.BLIND_REFERENCE_RATE_HZ`` position reference, like a motion tracker
 untouched recording as well: what it names there is the sensor's own calibration error and is subtracted
 (an effect it names there with the same name is compared by the change of its magnitude).
 
+What a case is credited with is the change it made to the loop's estimate (a paired comparison): its named
+magnitude less the untouched recording's estimate of the same effect. That estimate is the magnitude named there,
+or, for an effect the untouched run did not name (below the noise level on its own), the effect fitted to the
+untouched run's final twin (:func:`untouched_estimates`; effects whose magnitude is additive, not a cutoff or a
+range). A sensor's own error can project onto a library effect without being significant alone: paper-vn200's
+anisotropic G_g (G_xx +0.0041, G_zz -0.0022 deg/s/(m/s^2)) turns the stride's roll closure as an isotropic
+g-sensitivity of about 0.02 would, since the isotropic effect's x and z paths nearly cancel there. Each row also
+keeps the rule that subtracts only what the untouched run named (``found_subtracting_named``).
+
 The magnitude compared is the library's equivalent figure (``expected``): a gyro delay of tau is an
 ``accel_gyro_skew`` of -tau (the library's skew samples the gyro later); a first-order low-pass (here the
 exponential smoothing of a sampled RC stage) is named by its cutoff, by any library low-pass (the forms differ
@@ -41,6 +50,8 @@ from ..measured.reference import as_measured
 from ..scenario import scenario_from_dict
 from ..simulate import simulate_walk
 from . import attribution, settings
+from . import effects as fx
+from .twin import TwinSimulator
 
 SENSORS = ("paper-vn200", "bmi160")
 TWIN_YAW = "twin_yaw"  # what a mount rotation about z is found as: the twin's fitted yaw on the foot, not an effect
@@ -176,15 +187,47 @@ def unexplained(result: attribution.LoopResult) -> list:
     return [a["residual"] for a in result.attributions if a["effect"] == "unexplained"]
 
 
-def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribution.LoopResult) -> dict:
-    """What the loop named on the case beyond the ``untouched`` recording's result (an effect named there too
-    counts only when its magnitude moved by more than ``settings.BLIND_MAGNITUDE_TOLERANCE`` of the untouched
-    one), and whether it is the injected effect within that tolerance of the expected figure. An effect
-    outside the library is found when the loop names nothing beyond the untouched recording and leaves a
-    residual unexplained that it did not leave unexplained there. ``found_as`` says whether the injected effect
-    was named or only fit as well as the effect named (``equivalent``: the recording did not tell them apart);
-    ``found`` counts the named ones alone."""
-    before = named_effects(untouched)
+def untouched_estimates(case: BlindCase, result: attribution.LoopResult, untouched: attribution.LoopResult,
+                        simulate: TwinSimulator | None = None) -> dict:
+    """Effect name -> the untouched run's estimate of each of ``case``'s expected effects that the loop named on
+    the case but not on the untouched recording: the effect fitted to the untouched run's final twin, on the
+    residuals it moves, as the loop fits it (:func:`gaitsim.loop.attribution.fit_effect`). Only effects with an
+    additive magnitude (zero: absent) are estimated; a cutoff frequency or a range has no such difference."""
+    named, before = named_effects(result), named_effects(untouched)
+    wanted = [fx.BY_NAME[name] for name in case.named if name in fx.BY_NAME and name in named
+              and name not in before and not fx.BY_NAME[name].log_scale]
+    if not wanted:
+        return {}
+    simulate = simulate or TwinSimulator()
+    ctx = fx.context(untouched.measured.recording, untouched.twin_after.scenario, untouched.measured.signature,
+                     untouched.after.signature)
+    return {effect.name: attribution.fit_effect(simulate, effect, untouched.twin_after, untouched.measured,
+                                                untouched.residuals_after, ctx, untouched.noise).magnitude
+            for effect in wanted}
+
+
+def verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribution.LoopResult,
+            estimates: dict | None = None) -> dict:
+    """What the loop named on the case beyond the ``untouched`` recording's result (an effect named there too,
+    or estimated there (``estimates``, :func:`untouched_estimates`), counts only when its magnitude moved by more
+    than ``settings.BLIND_MAGNITUDE_TOLERANCE`` of the untouched one, and counts by that change), and whether it
+    is the injected effect within that tolerance of the expected figure. An effect outside the library is found
+    when the loop names nothing beyond the untouched recording and leaves a residual unexplained that it did not
+    leave unexplained there. ``found_as`` says whether the injected effect was named or only fit as well as the
+    effect named (``equivalent``: the recording did not tell them apart); ``found`` counts the named ones alone.
+    ``found_subtracting_named`` is ``found`` without the estimates (only what the untouched run named
+    subtracted)."""
+    estimates = estimates or {}
+    row = _verdict(case, result, untouched, {**estimates, **named_effects(untouched)})
+    row["untouched_estimated"] = estimates
+    row["found_subtracting_named"] = (_verdict(case, result, untouched, named_effects(untouched))["found"]
+                                      if estimates else row["found"])
+    return row
+
+
+def _verdict(case: BlindCase, result: attribution.LoopResult, untouched: attribution.LoopResult,
+             before: dict) -> dict:
+    """:func:`verdict` with ``before`` (effect name -> magnitude) as the untouched recording's estimates."""
 
     def beyond(effects: dict) -> dict:
         return {name: m - before.get(name, 0.0) for name, m in effects.items()

@@ -136,17 +136,24 @@ def _run_blind(folder: Path) -> list[str]:
     for source in blind.SENSORS + blind.MEASURED:
         untouched = blind.run(source, None)
         print(f"blind {source} untouched: {blind.named_effects(untouched)}", flush=True)
-        inside, outside = [], []  # found_as of the library cases, of the case outside the library
+        inside, outside = [], []  # the library cases' rows, the case outside the library's found_as
         for case in blind.cases(source):
+            result = blind.run(source, case)
             row = {"sensor": source, "untouched_named": blind.named_effects(untouched),
-                   **blind.verdict(case, blind.run(source, case), untouched)}
+                   **blind.verdict(case, result, untouched, blind.untouched_estimates(case, result, untouched))}
             rows.append(row)
-            (outside if case.named == ("unexplained",) else inside).append(row["found_as"])
+            if case.named == ("unexplained",):
+                outside.append(row["found_as"])
+            else:
+                inside.append(row)
             print(f"blind {source} {case.name}: found = {row['found_as']} {row['named_beyond_untouched']}", flush=True)
-        summary.append(f"{source}: {inside.count('named')} of {len(inside)} library effects named within "
-                       f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%}" +
-                       (f", {inside.count('equivalent')} more fit as well as the effect named"
-                        if "equivalent" in inside else "") +
+        found_as = [r["found_as"] for r in inside]
+        summary.append(f"{source}: {found_as.count('named')} of {len(inside)} library effects named within "
+                       f"{settings.BLIND_MAGNITUDE_TOLERANCE:.0%} ("
+                       f"{sum(r['found_subtracting_named'] for r in inside)} subtracting only what the untouched "
+                       "recording named)" +
+                       (f", {found_as.count('equivalent')} more fit as well as the effect named"
+                        if "equivalent" in found_as else "") +
                        (f"; outside effect unexplained: {outside[0] is not None}" if outside else ""))
     write_json(folder / "blind.json", rows)
     lines = ["# Blind tests", "", blind.__doc__.strip(), ""] + [f"- {line}" for line in summary] + [
@@ -157,6 +164,9 @@ def _run_blind(folder: Path) -> list[str]:
         if r["equivalent_beyond_untouched"]:
             named += " (as good: " + ", ".join(
                 f"{k} {shown(v)}" for k, v in r["equivalent_beyond_untouched"].items()) + ")"
+        if r["untouched_estimated"]:
+            named += " (the change from the untouched run's estimate, not named there: " + ", ".join(
+                f"{k} {shown(v)}" for k, v in r["untouched_estimated"].items()) + ")"
         if r["unexplained_beyond_untouched"]:
             named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
         lines.append(f"| {r['sensor']} | {r['case']} | {shown(r['injected'])} {r['unit']} | {r['expected_effect']} "
