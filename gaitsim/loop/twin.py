@@ -63,7 +63,7 @@ from ..world.foot import FootModel
 from ..world.gait import GaitParams, ImpactParams
 from . import gait_fit, mount_fit, settings
 from .push_off import push_off_height
-from .signature import Signature, signature
+from .signature import Signature, rest_core, signature
 from .strides import stance_intervals
 
 
@@ -190,15 +190,14 @@ def _rest_runs(t: np.ndarray, stationary: np.ndarray) -> tuple[float, float]:
 
 
 def _rest_gyro_mean(rec: Recording, stationary: np.ndarray, quiet: tuple[int, int]) -> np.ndarray:
-    """Mean angular rate (rad/s) over every detected rest of at least ``settings.QUIET_WINDOW_S`` after
-    trimming ``settings.REST_MARGIN_S`` from both ends (a detected rest reaches into the first heel off), or over the quietest
-    window when there is none: the gyro bias the twin is given. Over 0.5 s of a consumer gyro its standard
-    error is ~0.03 deg/s, as large as the heading drifts compared, so every rest sample counts."""
-    starts, ends = stationary_runs(stationary)
-    margin = int(round(settings.REST_MARGIN_S / np.median(np.diff(rec.t))))
-    inner = [(s + margin, e - margin) for s, e in zip(starts, ends)
-             if rec.t[e - 1 - margin] - rec.t[s + margin] >= settings.QUIET_WINDOW_S] if margin < len(rec.t) // 4 else []
-    rest = np.concatenate([rec.gyr[s:e] for s, e in inner]) if inner else rec.gyr[quiet[0]:quiet[1]]
+    """Mean angular rate (rad/s) over the core (:func:`gaitsim.loop.signature.rest_core`: less
+    ``settings.REST_MARGIN_S`` at both ends, where a detected rest reaches into the heel off) of every detected
+    rest whose core lasts at least ``settings.QUIET_WINDOW_S``, or over the quietest window when there is none:
+    the gyro bias the twin is given. Over 0.5 s of a consumer gyro its standard error is ~0.03 deg/s, as large
+    as the heading drifts compared, so every rest sample counts."""
+    cores = [rest_core(rec.t, run) for run in zip(*stationary_runs(stationary))]
+    cores = [c for c in cores if c.stop > c.start and rec.t[c.stop - 1] - rec.t[c.start] >= settings.QUIET_WINDOW_S]
+    rest = np.concatenate([rec.gyr[c] for c in cores]) if cores else rec.gyr[quiet[0]:quiet[1]]
     return rest.mean(axis=0)
 
 
