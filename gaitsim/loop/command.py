@@ -157,7 +157,8 @@ def _run_blind(folder: Path) -> list[str]:
                        (f"; outside effect unexplained: {outside[0] is not None}" if outside else ""))
     write_json(folder / "blind.json", rows)
     lines = ["# Blind tests", "", blind.__doc__.strip(), ""] + [f"- {line}" for line in summary] + [
-        "", "| recording | case | injected | expected | named beyond the untouched recording | found |",
+        "", "| recording | case | injected | expected | named beyond the untouched recording (the change of the "
+        "loop's estimate) | found |",
         "|---|---|---|---|---|---|"]
     for r in rows:
         named = ", ".join(f"{k} {shown(v)}" for k, v in r["named_beyond_untouched"].items()) or "-"
@@ -165,7 +166,7 @@ def _run_blind(folder: Path) -> list[str]:
             named += " (as good: " + ", ".join(
                 f"{k} {shown(v)}" for k, v in r["equivalent_beyond_untouched"].items()) + ")"
         if r["untouched_estimated"]:
-            named += " (the change from the untouched run's estimate, not named there: " + ", ".join(
+            named += " (less the untouched run's estimate, not named there: " + ", ".join(
                 f"{k} {shown(v)}" for k, v in r["untouched_estimated"].items()) + ")"
         if r["unexplained_beyond_untouched"]:
             named += f"; unexplained: {', '.join(r['unexplained_beyond_untouched'])}"
