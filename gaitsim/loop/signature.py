@@ -209,14 +209,15 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     if pos is not None and pos_t is not None:
         scalars["stance_velocity"] = mean_se(_stance_velocity(t, np.asarray(pos_t, float), np.asarray(pos, float),
                                                                strides, stances))
-    scalars["rest_acc_norm"] = _rest_acc_norm(acc[rest_core(t, stances_all[0])])
+    first_rest = rest_core(t, stances_all[0])
+    scalars["rest_acc_norm"] = _rest_acc_norm(acc[first_rest])
     scalars.update(_rest_changes(t, acc, gyr, stances_all))
     closing = closure_between_stances(t, acc, gyr, stances, following(stances, stances_all), gravity,
                                       rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
     for name, column in zip(CLOSURE, np.column_stack([closing.velocity, np.degrees(closing.tilt[:, :2])]).T):
         scalars[name] = mean_se(column)
     stride_s = float(np.mean(t[strides[:, 1] - 1] - t[strides[:, 0]]))
-    common = np.degrees(_rest_mean_se(t, gyr, stances_all[0])) * stride_s  # the bias's error, the same every stride
+    common = np.degrees(_rest_mean_se(gyr[first_rest])) * stride_s  # the bias's error, the same every stride
     for axis, name in enumerate(("closure_roll", "closure_pitch")):
         spread = scalars[name]
         scalars[name] = Scalar(spread.value, float(np.hypot(spread.se, common[axis])), spread.samples)
@@ -278,15 +279,14 @@ def rest_core(t: np.ndarray, rest) -> slice:
     return slice(start + margin, end - margin)
 
 
-def _rest_mean_se(t: np.ndarray, x: np.ndarray, rest) -> np.ndarray:
-    """(3,) standard error of the mean of ``x`` over the core of ``rest`` (samples' spread / sqrt(samples)).
+def _rest_mean_se(core: np.ndarray) -> np.ndarray:
+    """(3,) standard error of the mean of the samples ``core`` (N, 3) of a rest's core (spread / sqrt(samples)).
 
     The stride closure subtracts the first rest's mean rate as the gyro bias; its error turns every stride's tilt
     by about the same angle (error x stride duration), which the strides' scatter does not show. On a 200 Hz
     simulated walk that is ~0.003 deg/s (0.004 deg per stride), on the 60 Hz ucr-fgo recordings, whose first
     rests are 0.7-1.6 s of a foot that is not quite still (1-2.7 deg/s spread), 0.16-0.27 deg/s."""
-    core = x[rest_core(t, rest)]
-    return core.std(axis=0, ddof=1) / math.sqrt(len(core)) if len(core) > 1 else np.full(x.shape[1], math.nan)
+    return core.std(axis=0, ddof=1) / math.sqrt(len(core)) if len(core) > 1 else np.full(core.shape[1], math.nan)
 
 
 def _long_rests(t: np.ndarray, stances: np.ndarray) -> list:
@@ -296,11 +296,12 @@ def _long_rests(t: np.ndarray, stances: np.ndarray) -> list:
 
 def rest_gyro_bias(t: np.ndarray, gyr: np.ndarray, stances: np.ndarray, change: Scalar | None) -> np.ndarray:
     """(N, 3) rad/s, the gyro bias the stride closure subtracts: the mean rate over the core (:func:`rest_core`) of
-    the first detected stance (the initial rest). When the bias changed significantly between the first and the last long rest (``change``,
-    the ``rest_gyro_change`` scalar, beyond ``settings.NOISE_LEVEL`` times its standard error) the means of
-    those two rests are interpolated linearly in time between their centres instead (held constant outside):
-    a drifting bias is outside the effect library, and it must not leak into the closure, where it would read
-    as a scale or time error of the sensor. Below that level the last rest only adds its noise."""
+    the first detected stance (the initial rest). When the bias changed significantly between the first and the
+    last long rest (``change``, the ``rest_gyro_change`` scalar, beyond ``settings.NOISE_LEVEL`` times its
+    standard error) the means of those two rests' cores are interpolated linearly in time between their centres
+    instead (held constant outside): a drifting bias is outside the effect library, and it must not leak into the
+    closure, where it would read as a scale or time error of the sensor. Below that level the last rest only adds
+    its noise."""
     long = _long_rests(t, stances)
     if change is None or change.value <= settings.NOISE_LEVEL * change.se:
         return np.broadcast_to(gyr[rest_core(t, stances[0])].mean(0), gyr.shape)

@@ -28,9 +28,9 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
   loop adds), written as the sensor's ``mounting_misalignment`` (roll, pitch, yaw). The yaw is the twin's, not an
   effect of the library: an added yaw would be undone by the re-fit after it.
 - **Sensor noise and gyro bias**: white-noise densities std / sqrt(rate) per axis from the quietest
-  ``settings.QUIET_WINDOW_S`` of the recording, and the mean angular rate over every detected rest as the gyro
-  bias. :func:`match_noise` rescales the densities so that the twin's *output* has the recording's static standard deviation (once effects such as
-  a bandwidth filter the noise, the density that gives it is larger).
+  ``settings.QUIET_WINDOW_S`` of the recording, and the mean angular rate over every detected rest's core as the
+  gyro bias. :func:`match_noise` rescales the densities so that the twin's *output* has the recording's static
+  standard deviation (once effects such as a bandwidth filter the noise, the density that gives it is larger).
 
 Cadence and clearance are then corrected by simulating the twin and matching the same statistics
 (``settings.FIT_ITERATIONS`` rounds), so they do not rely on how a detector sees the simulator's events.
