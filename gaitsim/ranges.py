@@ -93,6 +93,11 @@ RANGES: dict[str, dict[str, Range]] = {
         "pitch_accel_to_swing_max_dps2": Range(-200_000, 0, "deg/s^2", "gaitmap: -8000 deg/s^2 after toe off, x25; "
                                                "0: no swing maximum knot"),
         "swing_height_m": Range(0, 0.6, "m", GAIT_LITERATURE + ": heel clearance 0.05-0.3 m (running)"),
+        "toe_release_accel_mps2": Range(0, 500, "m/s^2", "the foot's forward acceleration at toe off: ~50 m/s^2 "
+                                        "walking on gaitmap's Vicon, a few g running"),
+        "toe_release_s": Range(0, 0.2, "s", "the last part of a push-off of 0.1-0.3 s", open_low=True),
+        "swing_lead": Range(-0.5, 0.5, "", "fractions of the swing's travel; beyond half the heel would run "
+                                           "backward"),
         "swing_lateral_m": Range(-0.3, 0.3, "m", GAIT_LITERATURE + ": a few cm of circumduction"),
         "swing_roll_deg": Range(-45, 45, "deg", GAIT_LITERATURE),
         "toe_out_deg": Range(-45, 45, "deg", GAIT_LITERATURE + ": foot progression angle 5-15 deg"),

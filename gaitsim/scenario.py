@@ -28,10 +28,10 @@ Sections and keys (every key optional unless marked; units in the key names):
 
 Every number must be finite and inside its physical range (:mod:`gaitsim.ranges`, tabulated in
 ``docs/scenario-ranges.md``); then the rules between keys hold: the phase fractions add up to 1, the swing
-fits (mean foot speed <= MAX_SWING_SPEED) with its pitch maximum in its first half, the slap, heel strike and
-stance pulses fit their phases, ringing lies below the Nyquist frequency, the sensor's jitter, skew, clock error
-and bandwidths suit the sample rate, and one run stays below MAX_SAMPLES samples (estimated before anything is
-allocated). Rules over several keys are named after the key the user wrote.
+fits (mean foot speed <= MAX_SWING_SPEED) with its pitch maximum in its first half, the toe release fits the
+push-off, the slap, heel strike and stance pulses fit their phases, ringing lies below the Nyquist frequency, the
+sensor's jitter, skew, clock error and bandwidths suit the sample rate, and one run stays below MAX_SAMPLES
+samples (estimated before anything is allocated). Rules over several keys are named after the key the user wrote.
 
 Any unknown section or key, wrong type or impossible value raises :class:`ScenarioError` naming the file, the
 key, the value and what is allowed; nothing is written.
@@ -253,6 +253,11 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
                           f"the swing's pitch maximum comes pitch_rate_toe_off / |pitch_accel_to_swing_max| = "
                           f"{stop_s:.3g} s after toe off; it needs a toe-off rate turning the toes down (> 0) and "
                           f"must come in the first {MAX_SWING_MAX_SHARE:.0%} of the swing ({swing_s:.3g} s)")
+    push_off_s = g.push_off_frac * g.cycle_s
+    if g.toe_release_accel_mps2 and g.toe_release_s > push_off_s:
+        raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("toe_release_s", "push_off_frac",
+                                                                "cadence_steps_per_min")}, written,
+                      f"the toe release must fit in the push-off ({push_off_s:.3g} s)")
     if g.stride_length_sd_m > MAX_STRIDE_SD_SHARE * g.stride_length_m:
         raise _blamed(f"{where} [gait]", {k: gait[k] for k in ("stride_length_sd_m", "stride_length_m")}, written,
                       f"the stride-to-stride spread must be at most {MAX_STRIDE_SD_SHARE:.0%} of the stride")

@@ -102,6 +102,7 @@ def test_joint_trajectories_are_c4_at_every_knot():
                                    "stance_yaw_pivot_frac": 0.2, "contact_radius_m": 0.01,
                                    "creep_velocity_mps": [0.01, 0.002, 0.0]},
                       impact={"ringing_hz": 60.0, "ringing_damping": 0.15, "ringing_accel_mps2": 15.0},
+                      gait={"toe_release_accel_mps2": 40.0, "swing_lead": [0.03, -0.1, -0.05]},
                       path={"kind": "arc", "radius_m": 5.0, "turn_deg": 80.0, "yaw_deg": 0.0})
     plan = plan_stances(scen.walk, run_generators(5)[0])
     traj = FootTrajectory(scen.walk, plan, 0.2)
@@ -111,6 +112,7 @@ def test_joint_trajectories_are_c4_at_every_knot():
         plan.t_ic + imp.heel_strike_duration_s, plan.t_ff - mm.creep_ramp_s, plan.t_ho + mm.creep_ramp_s,
         plan.t_ff + mm.creep_ramp_s, plan.t_ho - mm.creep_ramp_s,
         plan.t_ff - imp.slap_duration_s + mm.loading_duration_s, _sole_joins(traj, plan),
+        plan.t_to - scen.walk.gait.toe_release_s,
     ])
     ring = smooth.Ringing(0.0, 60.0, 0.15, 15.0)
     events = np.concatenate([plan.t_ic[1:], plan.t_ff[1:]])
@@ -189,12 +191,19 @@ def _contact_kinematics(traj, t):
     return contact, w, heel_vel, heel, heading, dpitch
 
 
-@pytest.mark.parametrize("radius, creep", [(0.0, 0.0), (0.012, 0.004)])
-def test_the_contact_point_moves_only_by_its_creep_and_compliance(radius, creep):
+def _release_velocity(walk, plan, k, t) -> np.ndarray:
+    """(N,) m/s, forward velocity of stance k's toe release at times t (zero outside it)."""
+    g = walk.gait
+    return smooth.release(plan.t_to[k], g.toe_release_s, g.toe_release_accel_mps2).stack(t)[1]
+
+
+@pytest.mark.parametrize("radius, creep, release", [(0.0, 0.0, 0.0), (0.012, 0.004, 0.0), (0.0, 0.0, 40.0)])
+def test_the_contact_point_moves_only_by_its_creep_compliance_and_toe_release(radius, creep, release):
     """The material point of the foot at the ground contact moves at creep + contact radius x pitch rate
-    (forward, in the walking frame): still without them, for every stance phase the sole rolls through."""
+    (forward, in the walking frame) + the toe release in the push-off's last ``toe_release_s``: still without
+    them, for every stance phase the sole rolls through."""
     scen = short_walk(micromotion={**STILL_ROLL, "contact_radius_m": radius, "creep_velocity_mps": [creep, 0, 0]},
-                      gait={"stride_length_sd_m": 0.0})
+                      gait={"stride_length_sd_m": 0.0, "toe_release_accel_mps2": release})
     plan = plan_stances(scen.walk, run_generators(4)[0])
     traj = FootTrajectory(scen.walk, plan, 0.2)
     k = 2
@@ -204,15 +213,53 @@ def test_the_contact_point_moves_only_by_its_creep_and_compliance(radius, creep)
     material = heel_vel + np.cross(w, contact - heel)
     ramped = (t > plan.t_ff[k] - mm.creep_ramp_s) & (t < plan.t_ho[k] + mm.creep_ramp_s)
     plateau = (t > plan.t_ff[k]) & (t < plan.t_ho[k])
-    expected = radius * dpitch[:, None] * heading
+    expected = (radius * dpitch + _release_velocity(scen.walk, plan, k, t))[:, None] * heading
     np.testing.assert_allclose(material[~ramped], expected[~ramped], atol=1e-9)
     np.testing.assert_allclose(material[plateau], expected[plateau] + creep * heading[plateau], atol=1e-9)
+    slid = material[-1] @ heading[-1] - radius * dpitch[-1]  # at toe off
+    np.testing.assert_allclose(slid, release * scen.walk.gait.toe_release_s / 2, atol=1e-9)
+
+
+def test_the_toe_leaves_the_ground_accelerating_at_the_release_and_the_swing_lead_moves_only_the_middle():
+    """With a toe release, the foot's contact point has, at toe off, the release's velocity a d / 2 and
+    acceleration a along the walking direction; a swing lead moves the heel by lead x the swing's horizontal
+    travel at a quarter, half and three quarters of each swing and leaves both of its ends (value and four
+    derivatives) where the swing without it has them."""
+    gait = {"stride_length_sd_m": 0.0, "toe_release_accel_mps2": 0.0, "swing_lead": [0.0, 0.0, 0.0]}
+    lead = [0.05, -0.1, 0.02]
+    plain = short_walk(micromotion=STILL_ROLL, gait=gait)
+    led = short_walk(micromotion=STILL_ROLL, gait={**gait, "swing_lead": lead})
+    plan = plan_stances(plain.walk, run_generators(4)[0])
+    a, b = FootTrajectory(plain.walk, plan, 0.2), FootTrajectory(led.walk, plan, 0.2)
+    k = 2
+    t0, t1 = plan.t_to[k], plan.t_ic[k + 1]
+    ends = np.array([t0, t1])
+    np.testing.assert_allclose(b.joints(ends), a.joints(ends), rtol=0, atol=1e-9)
+    phases = t0 + np.array([0.25, 0.5, 0.75]) * (t1 - t0)
+    travel = np.linalg.norm(a.joints(np.array([t1]))[:2, 0, 0] - a.joints(np.array([t0]))[:2, 0, 0])
+    direction = np.array([np.cos(np.mean(plan.yaw[k:k + 2])), np.sin(np.mean(plan.yaw[k:k + 2]))])
+    moved = (b.joints(phases) - a.joints(phases))[:2, 0].T @ direction
+    np.testing.assert_allclose(moved, np.multiply(lead, travel), atol=1e-9)
+
+    released = short_walk(micromotion=STILL_ROLL, gait={**gait, "toe_release_accel_mps2": 40.0})
+    traj = FootTrajectory(released.walk, plan, 0.2)
+    t = plan.t_to[k] - np.array([1e-9, 0.0])
+    contact, w, heel_vel, heel, heading, _ = _contact_kinematics(traj, t)
+    j = traj.joints(t)
+    d = released.walk.gait.toe_release_s
+    np.testing.assert_allclose((heel_vel[-1] + np.cross(w[-1], contact[-1] - heel[-1])) @ heading[-1], 40.0 * d / 2,
+                               atol=1e-9)
+    piece = smooth.release(plan.t_to[k], d, 40.0).stack(t)
+    np.testing.assert_allclose(piece[1:3, -1], [40.0 * d / 2, 40.0], rtol=1e-12)
+    assert np.all(np.isfinite(j))
 
 
 def test_imu_velocity_is_the_rotation_about_the_contact():
-    """MuJoCo's IMU-site velocity equals w x (r_imu - r_contact) in every phase of the stance, and its forward
-    part in foot flat is pitch rate x height of the site above the ground (the rolling foot's law)."""
-    scen = short_walk(micromotion=STILL_ROLL, mount={"site": "instep"}, gait={"stride_length_sd_m": 0.0})
+    """MuJoCo's IMU-site velocity equals w x (r_imu - r_contact) in every phase of the stance (a fixed toe: no
+    release), and its forward part in foot flat is pitch rate x height of the site above the ground (the
+    rolling foot's law)."""
+    scen = short_walk(micromotion=STILL_ROLL, mount={"site": "instep"},
+                      gait={"stride_length_sd_m": 0.0, "toe_release_accel_mps2": 0.0})
     foot = FootModel(scen.mount)
     plan = plan_stances(scen.walk, run_generators(4)[0])
     traj = FootTrajectory(scen.walk, plan, foot.toe_length)

@@ -13,8 +13,11 @@ pitch (y') and roll (x''), so the foot attitude is Rz(yaw) Ry(pitch) Rx(roll).
   pivot on the heel-toe line; angles held through the push-off and returned over the swing).
 - Pitch: a Hermite through knots at heel strike, the start of the forefoot slap, foot flat (level, rising at the
   heel-rise rate), heel off, toe off and, if set, the swing's pitch maximum (:func:`pitch_profile`).
+- Push-off release: over its last ``toe_release_s`` the toe contact slides forward, its acceleration rising C4 to
+  ``toe_release_accel_mps2`` at toe off, so the foot leaves the ground already moving forward.
 - Swing [t_to, t_ic']: degree-9 Hermite of the heel point matching position and derivatives 1..4 at both ends,
-  plus a C4 lift (height) and sideways excursion; yaw turns to the next stance with a C4 smoothstep.
+  plus a C4 lift (height), a C4 lead along the walking direction (``swing_lead``: the heel's forward travel
+  redistributed over the swing) and a sideways excursion; yaw turns to the next stance with a C4 smoothstep.
 """
 
 from __future__ import annotations
@@ -272,7 +275,7 @@ class FootTrajectory:
         self.sole = RollingSole(toe_length, mm.contact_transfer_pitch, mm.contact_radius_m)
 
         # stance contact displacement (walking frame), per axis in the order added: heel-strike compression,
-        # impact ringing (vertical), creep
+        # impact ringing (vertical), creep, toe release (forward)
         v_hs = np.asarray(imp.heel_strike_velocity_mps, float)
         self.compression = v_hs * imp.heel_strike_duration_s / 2
         strikes = np.arange(1, n + 1)
@@ -292,6 +295,9 @@ class FootTrajectory:
                 self.contact[a].append(StancePieces(creeping, [
                     smooth.plateau_displacement(plan.t_ff[k], plan.t_ho[k], mm.creep_ramp_s,
                                                 mm.creep_velocity_mps[a]) for k in creeping]))
+        if n and g.toe_release_accel_mps2:  # forward in the walking frame, before each swing
+            self.contact[0].append(StancePieces(np.arange(n), [
+                smooth.release(plan.t_to[k], g.toe_release_s, g.toe_release_accel_mps2) for k in range(n)]))
         self.rotation = self._build_stance_rotation()
         self.heel_base = np.array([
             np.array([plan.pos[k, 0], plan.pos[k, 1], 0.0]) - (self.frames[k] @ self.compression if k > 0 else 0.0)
@@ -397,8 +403,9 @@ class FootTrajectory:
         """The swings' pieces, each kind packed in a :class:`smooth.PieceTable`: the heel point's Hermites
         (x, y, z), each from the heel's derivative stacks at toe off to those at the next initial contact
         (``ends`` (3, 5, 2 (n+1)): each stance's at initial contact and at toe off in turn), the lifts (raising
-        the mid-swing heel to ``swing_height_m``) and sideways excursions (along each swing's mean walking
-        direction turned left), and the foot's turns: yaw to the next stance, roll bump."""
+        the mid-swing heel to ``swing_height_m``), leads (``swing_lead``, along each swing's mean walking
+        direction, in fractions of its horizontal travel) and sideways excursions (that direction turned left), and
+        the foot's turns: yaw to the next stance, roll bump."""
         g, n, yaw = self.walk.gait, self.plan.n_strides, self.foot_yaw
         t0, t1 = self.plan.t_to[:-1], self.plan.t_ic[1:]
         self._swing_path = [smooth.PieceTable([smooth.hermite([t0[k], t1[k]], [ends[a, :, 2 * k + 1],
@@ -408,6 +415,10 @@ class FootTrajectory:
         self._swing_lift = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_height_m - z_mid[k])
                                               for k in range(n)])
         self._swing_side = smooth.PieceTable([smooth.lift(t0[k], t1[k] - t0[k], g.swing_lateral_m) for k in range(n)])
+        travel = np.hypot(*(ends[:2, 0, 2::2] - ends[:2, 0, 1:-1:2]))  # (n,) m, each swing's horizontal travel
+        self._swing_lead = smooth.PieceTable([
+            smooth.lead(t0[k], t1[k] - t0[k], np.multiply(g.swing_lead, travel[k])) for k in range(n)
+        ]) if any(g.swing_lead) else None
         mid_yaw = [0.5 * (self.walk_yaw[k] + self.walk_yaw[k + 1]) for k in range(n)]
         self._swing_sin = np.array([np.sin(y) for y in mid_yaw])
         self._swing_cos = np.array([np.cos(y) for y in mid_yaw])
@@ -422,6 +433,10 @@ class FootTrajectory:
         lateral = self._swing_side.stack(t, swing)
         out[0] -= self._swing_sin[swing] * lateral
         out[1] += self._swing_cos[swing] * lateral
+        if self._swing_lead is not None:
+            ahead = self._swing_lead.stack(t, swing)
+            out[0] += self._swing_cos[swing] * ahead
+            out[1] += self._swing_sin[swing] * ahead
         return out
 
     # -- public ---------------------------------------------------------------------------------------------

@@ -23,6 +23,12 @@ SMOOTHSTEP = np.array([0, 0, 0, 0, 0, 126, -420, 540, -315, 70], float)
 PULSE = 256.0 * P.polymul(P.polypow([0, 1], 4), P.polypow([1, -1], 4))
 # 1024 s^5 (1-s)^5: bump with peak 1 at s = 1/2, derivatives 0..4 vanish at both ends (a C4 displacement)
 LIFT = 1024.0 * P.polymul(P.polypow([0, 1], 5), P.polypow([1, -1], 5))
+# double integral of SMOOTHSTEP: a displacement whose 2nd derivative rises C4 from 0 to 1 over [0, 1] (value 3/22
+# and derivative 1/2 at s = 1)
+RELEASE = P.polyint(SMOOTHSTEP, 2)
+# s^5 (1-s)^5: derivatives 0..4 vanish at both ends; times a quadratic, the shapes :func:`lead` draws from
+LEAD_ENVELOPE = P.polymul(P.polypow([0, 1], 5), P.polypow([1, -1], 5))
+LEAD_PHASES = np.array([0.25, 0.5, 0.75])  # phases at which :func:`lead` takes its values
 PULSE_AREA = float(P.polyval(1.0, P.polyint(PULSE)))  # integral of PULSE over [0, 1] = 256 * B(5, 5)
 
 
@@ -313,6 +319,22 @@ def plateau_displacement(t_up: float, t_down: float, ramp: float, velocity: floa
 def lift(t0: float, duration: float, height: float) -> Piecewise:
     """``height * LIFT((t - t0)/duration)`` (m or rad): a C4 bump over [t0, t0 + duration], zero outside."""
     return Piecewise(scaled_poly(LIFT, t0, duration, height), np.array([t0, t0 + duration]))
+
+
+def release(t1: float, duration: float, accel: float) -> Piecewise:
+    """Displacement (m) over [t1 - duration, t1] whose acceleration rises C4 from 0 to ``accel`` (m/s^2) at ``t1``
+    (``accel * duration^2 * RELEASE``): zero with its derivatives 1..4 at the start; at ``t1``
+    ``3/22 accel duration^2`` m, moving at ``accel duration / 2`` m/s."""
+    t0 = t1 - duration
+    return Piecewise(scaled_poly(RELEASE, t0, duration, accel * duration**2), np.array([t0, t1]))
+
+
+def lead(t0: float, duration: float, values) -> Piecewise:
+    """A C4 displacement (m) over [t0, t0 + duration], zero outside, equal to ``values`` (3,) m at
+    :data:`LEAD_PHASES` of the duration: :data:`LEAD_ENVELOPE` times the quadratic through them, so the
+    displacement and its derivatives 1..4 vanish at both ends."""
+    quadratic = P.polyfit(LEAD_PHASES, np.asarray(values, float) / P.polyval(LEAD_PHASES, LEAD_ENVELOPE), 2)
+    return Piecewise(scaled_poly(P.polymul(LEAD_ENVELOPE, quadratic), t0, duration, 1.0), np.array([t0, t0 + duration]))
 
 
 def smoothstep(t0: float, duration: float, start: float, end: float) -> Piecewise:
