@@ -56,6 +56,13 @@ def test_a_rigid_turn_about_a_still_point_reads_the_gyro_delay(delay_ms):
     assert se < 0.1
 
 
+@pytest.mark.parametrize("delay_ms", [-25.0, 25.0])
+def test_a_delay_beyond_the_search_gives_no_lag_rather_than_its_edge(delay_ms):
+    t, f, w, stances = turns_about_a_still_point()
+    late = np.column_stack([np.interp(t - delay_ms / 1000.0, t, c) for c in w.T])
+    assert np.isnan(push_off_lag(t, f, late, stances)).all()
+
+
 def test_too_few_stances_give_no_lag():
     t, f, w, stances = turns_about_a_still_point(strides=2)
     assert np.isnan(push_off_lag(t, f, w, stances[:2])[0])

@@ -150,7 +150,9 @@ def _jackknife(values: np.ndarray) -> float:
 
 def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> tuple[float, float]:
     """The gyro's lag behind the accelerometer (ms, > 0: the gyro's samples come later) and its jackknife standard
-    error (module docstring); NaN for fewer than three stances with a full push-off window.
+    error (module docstring); NaN for fewer than three stances with a full push-off window, and where the best fit
+    lies at the edge of the search (+-``settings.LAG_RANGE_MS``: no minimum inside it, as on ucr-fgo's right foot,
+    60 Hz with gyro glitches).
 
     Parameters
     ----------
@@ -168,6 +170,8 @@ def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.nd
     moment = np.concatenate([moment.sum(0)[None], moment.sum(0) - moment])
     energy = np.concatenate([energy.sum(0)[None], energy.sum(0) - energy])
     residual = energy - np.einsum("kti,kti->kt", moment, _solve(normal, moment))
+    if np.argmin(residual[0]) in (0, len(taus) - 1):  # the search's edge: no minimum found inside it
+        return math.nan, math.nan
     lags = np.array([_parabola_minimum(taus, cost) for cost in residual])
     return float(lags[0]), _jackknife(lags[1:])
 
