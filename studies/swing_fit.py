@@ -8,7 +8,7 @@ through zero within 0.1 s of exceeding 200 deg/s: the toes leaving, a sharp even
 does not move), and their medians over strides are compared on a 10 ms grid from 0.25 s before to 0.45 s after.
 
 Fitted: the toe release's acceleration at toe off (``toe_release_accel_mps2``, over ``toe_release_s`` fixed at
-:data:`RELEASE_S`) and the swing lead (``swing_lead``, three values), by least squares on the twin's minus the
+:data:`RELEASE_S`) alone, then with the swing lead (``swing_lead``, three values), by least squares on the twin's minus the
 recording's median profiles of the feet fitted on: the speed (m/s, the Vicon's) and the specific force along x
 and z (the IMU's, in units of :data:`ACC_UNIT`: 1 m/s gained in 0.1 s), which the rate about y does not see.
 Printed: the fit on each foot and on both, and the
@@ -83,15 +83,19 @@ def twin_profiles(doc: dict, x) -> np.ndarray:
     return profiles(twin.truth.t, twin.truth.pos, twin.acc, twin.gyr)
 
 
-def fit(targets: list[tuple[np.ndarray, dict]]) -> np.ndarray:
-    """Release (m/s^2) and lead (3,) fitting the twins' profiles to the recordings' (module docstring)."""
+def fit(targets: list[tuple[np.ndarray, dict]], lead: bool) -> np.ndarray:
+    """Release (m/s^2) and lead (3,) fitting the twins' profiles to the recordings' (module docstring); the lead
+    held at zero unless ``lead``."""
     weight = np.array([1.0, 1.0, 1.0 / ACC_UNIT, 1.0 / ACC_UNIT])[list(FITTED), None]
 
     def residual(x):
-        return np.concatenate([(weight * (twin_profiles(doc, x) - measured)[list(FITTED)]).ravel()
+        full = np.r_[x, np.zeros(4 - len(x))]
+        return np.concatenate([(weight * (twin_profiles(doc, full) - measured)[list(FITTED)]).ravel()
                                for measured, doc in targets])
-    return least_squares(residual, [20.0, 0.0, 0.0, 0.0], bounds=([0.0, -0.3, -0.3, -0.3], [300.0, 0.3, 0.3, 0.3]),
-                         diff_step=1e-3).x
+    size = 4 if lead else 1
+    found = least_squares(residual, [20.0, 0.0, 0.0, 0.0][:size], diff_step=1e-3,
+                          bounds=([0.0, -0.3, -0.3, -0.3][:size], [300.0, 0.3, 0.3, 0.3][:size])).x
+    return np.r_[found, np.zeros(4 - size)]
 
 
 def main() -> None:
@@ -103,11 +107,12 @@ def main() -> None:
         doc.pop("sensor", None)
         feet[foot] = (recording_profiles(recordings[foot]), doc)
     folds = {"left": ("left",), "right": ("right",), "both": ("left", "right")}
-    fits = {name: fit([feet[f] for f in fitted]) for name, fitted in folds.items()}
+    fits = {(name, lead): fit([feet[f] for f in fitted], lead) for lead in (False, True)
+            for name, fitted in folds.items()}
     print(f"toe release over {RELEASE_S} s; rms misfit (twin - Vicon/IMU) per foot; * = fitted on that foot")
-    print("| fit | release (m/s^2) | lead at 25/50/75 % | foot | " + " | ".join(CHANNELS) + " |")
+    print("| fit on | release (m/s^2) | lead at 25/50/75 % | foot | " + " | ".join(CHANNELS) + " |")
     print("|---|---|---|---|" + "---|" * len(CHANNELS))
-    for name, x in [("none", np.zeros(4))] + list(fits.items()):
+    for (name, _), x in [(("none", False), np.zeros(4))] + list(fits.items()):
         for foot, (measured, doc) in feet.items():
             rms = np.sqrt(np.mean((twin_profiles(doc, x) - measured) ** 2, axis=1))
             mark = "*" if foot in folds.get(name, ()) else ""

@@ -86,8 +86,8 @@ def test_walks_of_different_pace_read_the_same_lag_with_their_sensors_in_step():
 def test_a_toe_rolling_off_after_the_fastest_turn_leaves_the_lag_alone():
     """The walking kind's toe release (the contact accelerating forward over the push-off's last 60 ms, past the
     turn's fastest rate) is not the rigid turn the lag is read from: the window stops before it, and the walk
-    reads the lag of the same walk on a fixed toe (the full window read -15 ms, the search's bound, at 115
-    steps/min)."""
+    reads the lag of the same walk on a fixed toe (over the full window the best fit lay on the search's edge,
+    -15 ms, at 115 steps/min)."""
     released = _lag_of_walk(115.0)
     assert released == pytest.approx(_lag_of_walk(115.0, toe_release_accel_mps2=0.0), abs=0.1)
     assert abs(released) < 3.0

@@ -12,7 +12,8 @@ a constant offset (m/s^2: the accelerometer's bias and what the rigid model leav
 little). The least-squares fit of (r, b) over the first ``settings.PUSH_OFF_S`` after every detected stance, up to
 the stance's fastest rate there, gives two readings (past the fastest turn the toe rolls off: a walking foot's
 toe contact accelerates forward over the push-off's last ~60 ms, :class:`gaitsim.world.gait.GaitParams`
-``toe_release_accel_mps2``, which inside the window moved the lag of a walk at 115 steps/min to -15 ms):
+``toe_release_accel_mps2``, which inside the window put the best lag of a walk at 115 steps/min on the search's
+edge):
 
 - **The lag** (:func:`push_off_lag`). When the gyro's samples come tau later than the accelerometer's, the relation
   holds for the rate read tau later, w(t) = w_measured(t + tau). The lag is the tau whose fit leaves the least

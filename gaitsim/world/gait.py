@@ -66,8 +66,8 @@ class GaitParams:
         and three quarters of the swing, in fractions of the swing's horizontal travel
         (:func:`gaitsim.world.smooth.lead`). The Hermite alone, fixed by the stance at both ends, packs the travel
         into the middle of the swing (peak speed ~2.4 times the mean; 7.2-7.7 m/s against the Vicon's 4.2-4.4 on
-        gaitmap's walks); a lag in the middle spreads it. Default (0, 0, 0): the Hermite alone; the walking kind
-        sets the values fitted with the release (:data:`gaitsim.world.gaits.SWING_LEAD`).
+        gaitmap's walks); a lag in the middle spreads it. Default (0, 0, 0): the Hermite alone (fitted with the
+        release on gaitmap: -0.035, -0.139, -0.072; why no kind uses it yet: :mod:`gaitsim.world.gaits`).
     swing_lateral_m : m, sideways excursion of the heel at mid-swing, positive to the left. Default 0.01.
     swing_roll : rad, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3 deg.
     toe_out : rad, foot yaw relative to the walking direction during stance (positive: toes to the left).

@@ -25,15 +25,17 @@ Walking (``"walk"``), c in steps/min, anchored at the seed walk (84 steps/min, 1
   carry the fit to the ends of the range;
 - the pitch rates at heel strike and toe off, and the forefoot slap rate, scale with the cadence (a faster cycle
   turns the same angles faster); the heel's touchdown velocity scales with the walking speed;
-- the swing's translation as gaitmap-healthy's Vicon shows it (``SWING_*``, `python3 -m studies.swing_fit`): a
-  toe release (the forefoot rolling off: the toe contact accelerating to 51 m/s^2 at toe off over its last
-  60 ms at 110 steps/min, scaled with the cadence squared) and a swing lead of (-0.035, -0.139, -0.072) of the
-  travel at 25/50/75 % of the swing. The degree-9 Hermite alone starts the swing from a still toe and packs the
-  travel into its middle: on the twins of gaitmap's walks the IMU site peaks at 7.2-7.7 m/s where the Vicon shows
-  4.2-4.4. Fitted on both feet, the twins' median speed profile around the toe-off reversal misfits by 0.65 /
-  0.97 m/s instead of 1.68 / 2.13, specific force along x by 11.5 / 20.8 instead of 29.9 / 41.6 m/s^2 (fitted on
-  one foot, the other foot, held out, improves alike). The running kinds keep the Hermite swing (no running
-  recording to fit).
+- the push-off's toe release as gaitmap-healthy's Vicon shows it (``SWING_*``, `python3 -m studies.swing_fit`):
+  the toe contact accelerating to 47.5 m/s^2 at toe off over the push-off's last 60 ms at 110 steps/min (scaled
+  with the cadence squared), so the foot leaves the ground moving forward. A fixed toe starts the swing's Hermite
+  from rest and packs the travel into its middle: on the twins of gaitmap's walks the IMU site peaks at 7.2-7.7
+  m/s where the Vicon shows 4.2-4.4. Fitted on both feet, the twins' median profiles around the toe-off reversal
+  misfit by 1.36 / 1.58 m/s in speed instead of 1.68 / 2.13 and by 19.4 / 25.2 m/s^2 in specific force along x
+  instead of 29.9 / 41.6 (fitted on one foot, the other, held out, improves alike). The swing lead fitted with it
+  (``swing_lead`` -0.035 / -0.139 / -0.072) halves the misfit again at 110 steps/min, but at 60 the same fractions
+  make the late swing glide at 2.3 m/s with the pitch rate crossing zero, which nav's anchored SHOE took for a
+  stance in every stride (117 % error): it stays a scenario key, not a default, until a slower walk is fitted.
+  The running kinds keep a fixed toe (no running recording to fit).
 
 Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
 
@@ -118,14 +120,12 @@ WALK_FIT_CADENCE = 103.0  # steps/min, their mean cadence
 WALK_TOE_OFF_SLOPE = 0.67  # deg per step/min: from the seed's 45 deg at 84 to their mean 57.7 deg at 103
 WALK_TOE_OFF_ACCEL = -6350.0  # deg/s^2 at WALK_FIT_CADENCE, their mean; scales with the cadence squared
 
-# the walking swing's translation, fitted by `python3 -m studies.swing_fit` to the IMU site's forward speed through
-# push-off and swing on gaitmap-healthy's Vicon (both feet, 109-110 steps/min; ../shared/data): the toe release's
-# acceleration at toe off (scaled with the cadence squared, as the pitch accelerations) over a fixed duration, and
-# the swing lead (fractions of the swing's travel, the same at every pace)
+# the walking push-off's toe release, fitted by `python3 -m studies.swing_fit` to the IMU site's speed and specific
+# force around toe off on gaitmap-healthy's Vicon (both feet, 109-110 steps/min; ../shared/data): its acceleration
+# at toe off, scaled with the cadence squared as the pitch accelerations, over a fixed duration
 SWING_FIT_CADENCE = 109.7  # steps/min, the two twins' mean cadence
-SWING_TOE_RELEASE = 51.4  # m/s^2 at SWING_FIT_CADENCE
-SWING_RELEASE_S = 0.06  # s, fixed (0.04-0.10 s fit alike: study's output)
-SWING_LEAD = (-0.035, -0.139, -0.072)
+SWING_TOE_RELEASE = 47.5  # m/s^2 at SWING_FIT_CADENCE
+SWING_RELEASE_S = 0.06  # s, fixed (0.04-0.10 s fit alike)
 
 RUN_CADENCE = 165.0  # steps/min, the middle of the running span
 RUN_STEP_M = 1.2
@@ -165,7 +165,7 @@ def walk_tables(cadence: float) -> dict[str, dict]:
             "pitch_toe_off_deg": 45.0 + WALK_TOE_OFF_SLOPE * (cadence - SEED_CADENCE),
             "pitch_rate_heel_strike_dps": 60.0 * pace, "pitch_rate_toe_off_dps": 150.0 * pace,
             "pitch_accel_toe_off_dps2": WALK_TOE_OFF_ACCEL * (cadence / WALK_FIT_CADENCE) ** 2,
-            "toe_release_accel_mps2": toe_release_accel(cadence), "swing_lead": list(SWING_LEAD)}
+            "toe_release_accel_mps2": toe_release_accel(cadence)}
     impact = {"heel_strike_velocity_mps": [0.25 * speed_ratio, 0.0, -0.3 * speed_ratio],
               "slap_rate_dps": 250.0 * pace}
     return {"gait": gait, "impact": impact, "micromotion": {}}
