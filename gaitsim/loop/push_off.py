@@ -9,11 +9,12 @@ still point the specific force at the sensor follows from the angular rate alone
 with S(.) the cross-product matrix, r the lever from the contact to the sensor (m, unknown, constant), u(t) the
 reaction to gravity (m/s^2: the specific force at rest at the end of the stance, carried forward by the rate) and b
 a constant offset (m/s^2: the accelerometer's bias and what the rigid model leaves, e.g. a contact that rolls a
-little). The least-squares fit of (r, b) over the first ``settings.PUSH_OFF_S`` after every detected stance, up to
-the stance's fastest rate there, gives two readings (past the fastest turn the toe rolls off: a walking foot's
-toe contact accelerates forward over the push-off's last ~60 ms, :class:`gaitsim.world.gait.GaitParams`
-``toe_release_accel_mps2``, which inside the window put the best lag of a walk at 115 steps/min on the search's
-edge):
+little). The least-squares fit of (r, b) over the first ``settings.PUSH_OFF_S`` after every detected stance gives
+two readings (the turn must stay rigid over the window: a toe that rolls off inside it, as the walking kind's toe
+release over the push-off's last 60 ms does at 110 steps/min and faster, :class:`gaitsim.world.gait.GaitParams`
+``toe_release_accel_mps2``, leaves no minimum in the lag's search, and the lag is no reading; fitting each stance
+only up to its fastest rate avoided that, but cost the full-size blind walks their gyro delay, paper-vn200's and
+bmi160's, and was not kept):
 
 - **The lag** (:func:`push_off_lag`). When the gyro's samples come tau later than the accelerometer's, the relation
   holds for the rate read tau later, w(t) = w_measured(t + tau). The lag is the tau whose fit leaves the least
@@ -86,8 +87,7 @@ def _parabola_minimum(x: np.ndarray, cost: np.ndarray) -> float:
 def _push_off(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray):
     """What every reading takes from the recording: the sample rate (Hz), the window (samples), the margin kept
     either side of it for shifted reads, the (m, L, 9) rate, its derivative and u over the spans any shifted read
-    may reach, the (m, n, 3) specific force fitted and the (m, n) samples of each window fitted (up to its
-    largest rate); None for fewer than three stances with a full window.
+    may reach, and the (m, n, 3) specific force fitted; None for fewer than three stances with a full window.
 
     The samples read are taken as evenly spaced at the median rate."""
     rate = 1.0 / float(np.median(np.diff(t)))
@@ -101,16 +101,13 @@ def _push_off(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarr
     span = ends[:, None] + np.arange(-margin, n + margin)
     on_span = np.concatenate([gyr[span], (np.gradient(gyr, axis=0) * rate)[span],
                               _gravity_reaction(acc, gyr, ends, -margin, n + 2 * margin, rate)], axis=-1)
-    speed = np.linalg.norm(gyr[ends[:, None] + np.arange(n)], axis=-1)
-    fitted = np.arange(n) <= np.argmax(speed, axis=1)[:, None]  # the turn up to its fastest: the toe still down
-    return rate, n, margin, on_span, acc[ends[:, None] + np.arange(n)], fitted
+    return rate, n, margin, on_span, acc[ends[:, None] + np.arange(n)]
 
 
-def _normal_equations(on_span: np.ndarray, f: np.ndarray, fitted: np.ndarray, rate: float, margin: int,
-                      taus_ms: np.ndarray):
-    """Per stance and lag, the least-squares system of (r, b) over the samples ``fitted`` (m, n) with the rate, its
-    derivative and u read ``taus_ms`` (T,) later (linear interpolation between samples): D^T D (m, T, 6, 6),
-    D^T y (m, T, 6), y^T y (m, T), and the rates read (m, T, n, 3).
+def _normal_equations(on_span: np.ndarray, f: np.ndarray, rate: float, margin: int, taus_ms: np.ndarray):
+    """Per stance and lag, the least-squares system of (r, b) with the rate, its derivative and u read ``taus_ms``
+    (T,) later (linear interpolation between samples): D^T D (m, T, 6, 6), D^T y (m, T, 6), y^T y (m, T), and the
+    rates read (m, T, n, 3).
 
     Every sample's three rows of D are [A, I] with A = S(dw/dt) + S(w)^2 = S(dw/dt) + w w^T - |w|^2 I, so D^T D
     is [[sum A^T A, sum A^T], [sum A, n I]] and D^T y is [sum A^T y, sum y]."""
@@ -119,18 +116,16 @@ def _normal_equations(on_span: np.ndarray, f: np.ndarray, fitted: np.ndarray, ra
     i = np.floor(read).astype(int)
     share = (read - i)[None, :, :, None]
     w, w_dot, u = np.split(on_span[:, i] * (1.0 - share) + on_span[:, i + 1] * share, 3, axis=-1)
-    weight = fitted[:, None, :, None, None].astype(float)
-    turn = weight * (skew(w_dot) + w[..., :, None] * w[..., None, :]
-                     - np.sum(w * w, axis=-1)[..., None, None] * np.eye(3))
+    turn = skew(w_dot) + w[..., :, None] * w[..., None, :] - np.sum(w * w, axis=-1)[..., None, None] * np.eye(3)
     rows = turn.reshape(m, len(read), 3 * n, 3)  # the three axes of every sample as rows
-    y = weight[..., 0] * (f[:, None] - u)
+    y = f[:, None] - u
     stacked = y.reshape(m, len(read), 3 * n)
     summed = turn.sum(axis=2)
     normal = np.empty((m, len(read), 6, 6))
     normal[..., :3, :3] = rows.swapaxes(-1, -2) @ rows
     normal[..., :3, 3:] = summed.swapaxes(-1, -2)
     normal[..., 3:, :3] = summed
-    normal[..., 3:, 3:] = fitted.sum(axis=1)[:, None, None, None] * np.eye(3)
+    normal[..., 3:, 3:] = n * np.eye(3)
     moment = np.concatenate([(rows.swapaxes(-1, -2) @ stacked[..., None])[..., 0], y.sum(axis=2)], axis=-1)
     return normal, moment, np.sum(stacked * stacked, axis=-1), w
 
@@ -152,8 +147,8 @@ def _jackknife(values: np.ndarray) -> float:
 def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> tuple[float, float]:
     """The gyro's lag behind the accelerometer (ms, > 0: the gyro's samples come later) and its jackknife standard
     error (module docstring); NaN for fewer than three stances with a full push-off window, and where the best fit
-    lies at the edge of the search (+-``settings.LAG_RANGE_MS``: no minimum inside it, as on ucr-fgo's right foot,
-    60 Hz with gyro glitches).
+    lies on the edge of the search (+-``settings.LAG_RANGE_MS``: no minimum inside it, e.g. the walking kind's toe
+    release inside the window, below).
 
     Parameters
     ----------
@@ -163,9 +158,9 @@ def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.nd
     prepared = _push_off(t, acc, gyr, stances)
     if prepared is None:
         return math.nan, math.nan
-    rate, n, margin, on_span, f, fitted = prepared
+    rate, n, margin, on_span, f = prepared
     taus = np.arange(-settings.LAG_RANGE_MS, settings.LAG_RANGE_MS + settings.LAG_STEP_MS / 2, settings.LAG_STEP_MS)
-    normal, moment, energy, _ = _normal_equations(on_span, f, fitted, rate, margin, taus)  # (m, T, ...)
+    normal, moment, energy, _ = _normal_equations(on_span, f, rate, margin, taus)  # (m, T, ...)
     # the sums over all stances, then over all but one (the jackknife), solved in one call
     normal = np.concatenate([normal.sum(0)[None], normal.sum(0) - normal])
     moment = np.concatenate([moment.sum(0)[None], moment.sum(0) - moment])
@@ -192,9 +187,8 @@ def push_off_height(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np
     prepared = _push_off(t, acc, gyr, stances)
     if prepared is None:
         return math.nan, math.nan, math.nan
-    rate, _, margin, on_span, f, fitted = prepared
-    normal, moment, _, w = (x[:, 0] for x in _normal_equations(on_span, f, fitted, rate, margin,
-                                                                  np.array([lag_ms])))
+    rate, _, margin, on_span, f = prepared
+    normal, moment, _, w = (x[:, 0] for x in _normal_equations(on_span, f, rate, margin, np.array([lag_ms])))
     up = np.mean([acc[start:end].mean(0) for start, end in stances], axis=0)  # the foot flat's specific force
     up /= np.linalg.norm(up)
     axis = w.sum((0, 1))  # the turn's axis: heel rising, toes down
