@@ -34,7 +34,7 @@ from gaitsim.scenario import scenario_from_dict
 from gaitsim.simulate import sense, simulate_world
 from gaitsim.stance.command import load_recordings
 
-RELEASE_S = 0.06  # s
+RELEASE_S = 0.04  # s
 GRID = np.arange(-0.25, 0.45, 0.01)  # s from the gyro reversal
 REVERSAL_FROM_DPS = 200.0  # deg/s, push-off rate the reversal must follow within REVERSAL_WINDOW_S
 REVERSAL_WINDOW_S = 0.1

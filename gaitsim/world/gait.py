@@ -61,13 +61,13 @@ class GaitParams:
         forward at 2.1-2.6 m/s while the toe is still down, against 0.4-0.6 m/s for the fixed toe. Default 0 (a
         fixed toe until toe off, the seed walk as it was); the walking kind sets the value fitted to gaitmap's
         Vicon (:func:`gaitsim.world.gaits.toe_release_accel`).
-    toe_release_s : s, duration d of that release. Default 0.06.
+    toe_release_s : s, duration d of that release. Default 0.04.
     swing_lead : (3,) dimensionless, how far the heel runs ahead of the swing's degree-9 Hermite at a quarter, half
         and three quarters of the swing, in fractions of the swing's horizontal travel
         (:func:`gaitsim.world.smooth.lead`). The Hermite alone, fixed by the stance at both ends, packs the travel
         into the middle of the swing (peak speed ~2.4 times the mean; 7.2-7.7 m/s against the Vicon's 4.2-4.4 on
         gaitmap's walks); a lag in the middle spreads it. Default (0, 0, 0): the Hermite alone (fitted with the
-        release on gaitmap: -0.035, -0.139, -0.072; why no kind uses it yet: :mod:`gaitsim.world.gaits`).
+        release on gaitmap: -0.035, -0.140, -0.073; why no kind uses it yet: :mod:`gaitsim.world.gaits`).
     swing_lateral_m : m, sideways excursion of the heel at mid-swing, positive to the left. Default 0.01.
     swing_roll : rad, foot roll at mid-swing (positive: rotation about the toe axis x). Default 3 deg.
     toe_out : rad, foot yaw relative to the walking direction during stance (positive: toes to the left).
