@@ -9,12 +9,11 @@ still point the specific force at the sensor follows from the angular rate alone
 with S(.) the cross-product matrix, r the lever from the contact to the sensor (m, unknown, constant), u(t) the
 reaction to gravity (m/s^2: the specific force at rest at the end of the stance, carried forward by the rate) and b
 a constant offset (m/s^2: the accelerometer's bias and what the rigid model leaves, e.g. a contact that rolls a
-little). The least-squares fit of (r, b) over the first ``settings.PUSH_OFF_S`` after every detected stance gives
-two readings (below). The turn must stay rigid over the window: the walking kind's toe release (the toe contact sliding
-forward over the push-off's last 40 ms, :class:`gaitsim.world.gait.GaitParams` ``toe_release_accel_mps2``) stays
-beyond it up to 115 steps/min; faster it enters it (the lag of an in-step walk: +0.45 ms at 120, -3.9 at 125 and
-no reading at 130 steps/min, against +0.8 on a fixed toe). Fitting each stance only up to its fastest rate kept the
-release out, but cost the full-size blind walks their gyro delay (paper-vn200's and bmi160's) and was not kept.
+little). The turn must stay rigid over the window: the walking kind's toe release (the toe contact sliding forward
+over the push-off's last 40 ms, :class:`gaitsim.world.gait.GaitParams` ``toe_release_accel_mps2``) stays beyond it
+up to 115 steps/min; faster it enters it and the lag is wrong (+0.45 / -3.9 ms at 120 / 125 steps/min against
++0.8 on a fixed toe, the search's -15 ms edge at 130). The least-squares fit of (r, b) over the first
+``settings.PUSH_OFF_S`` after every detected stance gives two readings:
 
 - **The lag** (:func:`push_off_lag`). When the gyro's samples come tau later than the accelerometer's, the relation
   holds for the rate read tau later, w(t) = w_measured(t + tau). The lag is the tau whose fit leaves the least
@@ -146,9 +145,7 @@ def _jackknife(values: np.ndarray) -> float:
 
 def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> tuple[float, float]:
     """The gyro's lag behind the accelerometer (ms, > 0: the gyro's samples come later) and its jackknife standard
-    error (module docstring); NaN for fewer than three stances with a full push-off window, and where the best fit
-    lies on the edge of the search (+-``settings.LAG_RANGE_MS``: no minimum inside it, e.g. the walking kind's toe
-    release inside the window at 130 steps/min).
+    error (module docstring); NaN for fewer than three stances with a full push-off window.
 
     Parameters
     ----------
@@ -166,8 +163,6 @@ def push_off_lag(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.nd
     moment = np.concatenate([moment.sum(0)[None], moment.sum(0) - moment])
     energy = np.concatenate([energy.sum(0)[None], energy.sum(0) - energy])
     residual = energy - np.einsum("kti,kti->kt", moment, _solve(normal, moment))
-    if np.argmin(residual[0]) in (0, len(taus) - 1):  # the search's edge: no minimum found inside it
-        return math.nan, math.nan
     lags = np.array([_parabola_minimum(taus, cost) for cost in residual])
     return float(lags[0]), _jackknife(lags[1:])
 
