@@ -8,12 +8,13 @@ through zero within 0.1 s of exceeding 200 deg/s: the toes leaving, a sharp even
 does not move), and their medians over strides are compared on a 10 ms grid from 0.25 s before to 0.45 s after.
 
 Fitted: the toe release's acceleration at toe off (``toe_release_accel_mps2``, over ``toe_release_s`` fixed at
-:data:`RELEASE_S`) alone, then with the swing lead (``swing_lead``, three values), by least squares on the twin's minus the
-recording's median profiles of the feet fitted on: the speed (m/s, the Vicon's) and the specific force along x
-and z (the IMU's, in units of :data:`ACC_UNIT`: 1 m/s gained in 0.1 s), which the rate about y does not see.
-Printed: the fit on each foot and on both, and the
-rms misfit of speed (m/s), acc x and z (m/s^2) and gyro y (deg/s, which the translation leaves alone) of the
-twin without and with each fit on each foot (a foot not fitted on is held out).
+:data:`RELEASE_S`) alone, then with the swing lead (``swing_lead``, three values), by least squares on the twin's
+minus the recording's median profiles of the feet fitted on: the speed (m/s, the Vicon's) and the specific force
+along x and z (the IMU's, in units of :data:`ACC_UNIT`: 1 m/s gained in 0.1 s), which the rate about y does not
+see. Printed: the fit on each foot and on both, and the rms misfit of speed (m/s), acc x and z (m/s^2) and gyro y
+(deg/s, which the translation leaves alone) of the twin without and with each fit on each foot (a foot not
+fitted on is held out). The walking kind's release (:data:`gaitsim.world.gaits.SWING_TOE_RELEASE`) is the
+both-feet fit of the release alone.
 
 Run from the repository root (it reads ../shared/data and results/loop; ~1 min)::
 

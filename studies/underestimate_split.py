@@ -86,7 +86,8 @@ def main() -> None:
                     s = split(r, track_t, track_pos, threshold)
                     print(f"| {dataset}/{name} | {label} | {threshold:.0e} | {s['strides']} | {s['error_pct']:+.2f} = "
                           f"{s['integral_pct']:+.2f} + {s['corrections_pct']:+.2f} | {s['onset_forward_mmps']:+.0f} / "
-                          f"{s['onset_up_mmps']:+.0f} | {s['reference_forward_mmps']:+.0f} / {s['reference_up_mmps']:+.0f} |")
+                          f"{s['onset_up_mmps']:+.0f} | {s['reference_forward_mmps']:+.0f} / "
+                          f"{s['reference_up_mmps']:+.0f} |")
 
 
 if __name__ == "__main__":

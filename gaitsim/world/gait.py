@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .gaits import SWING_RELEASE_S
-
 from .path import Path
 
 

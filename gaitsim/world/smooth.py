@@ -334,7 +334,8 @@ def lead(t0: float, duration: float, values) -> Piecewise:
     :data:`LEAD_PHASES` of the duration: :data:`LEAD_ENVELOPE` times the quadratic through them, so the
     displacement and its derivatives 1..4 vanish at both ends."""
     quadratic = P.polyfit(LEAD_PHASES, np.asarray(values, float) / P.polyval(LEAD_PHASES, LEAD_ENVELOPE), 2)
-    return Piecewise(scaled_poly(P.polymul(LEAD_ENVELOPE, quadratic), t0, duration, 1.0), np.array([t0, t0 + duration]))
+    return Piecewise(scaled_poly(P.polymul(LEAD_ENVELOPE, quadratic), t0, duration, 1.0),
+                     np.array([t0, t0 + duration]))
 
 
 def smoothstep(t0: float, duration: float, start: float, end: float) -> Piecewise:
