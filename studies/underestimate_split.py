@@ -15,8 +15,8 @@ recording's gait, rate and IMU site, the default stance model) read by the ideal
 sensor of the recording's class, all integrated from point samples (RK4) at SHOE thresholds 1e4, 3e4 and 5e4.
 
 A second table follows each recording's velocity error (filter minus reference, forward along the stride and up,
-mean over strides) and the norm of the specific force (median) over the 200 ms before each stance's first
-detected sample and 30 ms into it, at SHOE 3e4: when the error the first update sees arose.
+mean over strides), the norm of the specific force and the rate about y (medians) over the 200 ms before each
+stance's first detected sample and 30 ms into it, at SHOE 3e4: when the error the first update sees arose.
 
 Run from the repository root (it reads ../shared/data; ~20 s)::
 
@@ -61,8 +61,8 @@ def _strides(rec, track_t: np.ndarray, track_pos: np.ndarray, threshold: float):
 
 
 def onset_profile(rec, track_t: np.ndarray, track_pos: np.ndarray, threshold: float) -> np.ndarray:
-    """(3, G): mean forward and up velocity error (m/s) and median |f| (m/s^2) on :data:`ONSET_GRID_S` around
-    each stance's first detected sample."""
+    """(4, G): mean forward and up velocity error (m/s), median |f| (m/s^2) and median rate about y (deg/s) on
+    :data:`ONSET_GRID_S` around each stance's first detected sample."""
     track, sol, t, strides = _strides(rec, track_t, track_pos, threshold)
     rows = []
     for m0, m1, first, _ in strides:
@@ -73,9 +73,10 @@ def onset_profile(rec, track_t: np.ndarray, track_pos: np.ndarray, threshold: fl
         vel = np.stack([np.interp(times, t, sol.vel[:, i]) for i in range(3)], -1)
         ref = track(times, 1)
         rows.append([vel[:, :2] @ along - ref[:, :2] @ true_along, vel[:, 2] - ref[:, 2],
-                     np.interp(times, t, np.linalg.norm(rec.acc, axis=1))])
+                     np.interp(times, t, np.linalg.norm(rec.acc, axis=1)),
+                     np.interp(times, t, np.degrees(rec.gyr[:, 1]))])
     rows = np.array(rows)
-    return np.stack([rows[:, 0].mean(0), rows[:, 1].mean(0), np.median(rows[:, 2], 0)])
+    return np.stack([rows[:, 0].mean(0), rows[:, 1].mean(0), np.median(rows[:, 2], 0), np.median(rows[:, 3], 0)])
 
 
 def split(rec, track_t: np.ndarray, track_pos: np.ndarray, threshold: float) -> dict:
@@ -127,9 +128,9 @@ def onset_tables() -> None:
     print("|---|---|" + "---|" * len(ONSET_GRID_S))
     for dataset in DATASETS:
         for name, rec in load_recordings(dataset):
-            forward, up, force = onset_profile(rec, rec.reference.t, rec.reference.pos, 3e4)
+            forward, up, force, rate = onset_profile(rec, rec.reference.t, rec.reference.pos, 3e4)
             for label, row, scale in (("forward error (mm/s)", forward, 1000), ("up error (mm/s)", up, 1000),
-                                      ("specific force norm (m/s^2)", force, 1)):
+                                      ("specific force norm (m/s^2)", force, 1), ("rate about y (deg/s)", rate, 1)):
                 print(f"| {dataset}/{name} | {label} | " + " | ".join(f"{scale * x:.0f}" for x in row) + " |")
 
 
