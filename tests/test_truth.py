@@ -243,15 +243,13 @@ def test_the_toe_leaves_the_ground_accelerating_at_the_release_and_the_swing_lea
 
     released = short_walk(micromotion=STILL_ROLL, gait={**gait, "toe_release_accel_mps2": 40.0})
     traj = FootTrajectory(released.walk, plan, 0.2)
-    t = plan.t_to[k] - np.array([1e-9, 0.0])
+    step = 1e-4
+    t = plan.t_to[k] - np.array([step, 0.0])
     contact, w, heel_vel, heel, heading, _ = _contact_kinematics(traj, t)
-    j = traj.joints(t)
+    forward = np.einsum("ni,ni->n", heel_vel + np.cross(w, contact - heel), heading)  # the contact's material point
     d = released.walk.gait.toe_release_s
-    np.testing.assert_allclose((heel_vel[-1] + np.cross(w[-1], contact[-1] - heel[-1])) @ heading[-1], 40.0 * d / 2,
-                               atol=1e-9)
-    piece = smooth.release(plan.t_to[k], d, 40.0).stack(t)
-    np.testing.assert_allclose(piece[1:3, -1], [40.0 * d / 2, 40.0], rtol=1e-12)
-    assert np.all(np.isfinite(j))
+    np.testing.assert_allclose(forward[-1], 40.0 * d / 2, atol=1e-9)
+    np.testing.assert_allclose((forward[1] - forward[0]) / step, 40.0, rtol=1e-3)
 
 
 def test_imu_velocity_is_the_rotation_about_the_contact():

@@ -321,8 +321,7 @@ def _rest_changes(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.n
     out = {}
     for name, x, scale in (("rest_gyro_change", gyr, math.degrees(1.0)), ("rest_acc_change", acc, 1.0)):
         change = scale * (x[last].mean(0) - x[first].mean(0))
-        spread = scale * np.hypot(x[first].std(0, ddof=1) / math.sqrt(first.stop - first.start),
-                                  x[last].std(0, ddof=1) / math.sqrt(last.stop - last.start))
+        spread = scale * np.hypot(_rest_mean_se(x[first]), _rest_mean_se(x[last]))
         out[name] = Scalar(float(np.linalg.norm(change)), float(np.linalg.norm(spread)), change)
     return out
 
