@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .constants import DEFAULT_GRAVITY
+from ._numba import kernel_array
 from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES, strapdown_run
 
 METHODS = ("rk4", "increments")
@@ -97,15 +98,15 @@ def integrate(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, quat0: np.ndarray
     -------
     Trajectory on the N samples.
     """
-    t = np.ascontiguousarray(t, float)
-    acc = np.ascontiguousarray(acc, float)
-    gyr = np.ascontiguousarray(gyr, float)
+    t = kernel_array(t, float)
+    acc = kernel_array(acc, float)
+    gyr = kernel_array(gyr, float)
     n = len(t)
     quat = np.empty((n, 4))
     vel = np.empty((n, 3))
     pos = np.empty((n, 3))
     q0 = np.asarray(quat0, float) / np.linalg.norm(quat0)
-    strapdown_run(mechanisation_mode(method), t, acc, gyr, 0, q0, np.asarray(vel0, float), np.asarray(pos0, float),
+    strapdown_run(mechanisation_mode(method), t, acc, gyr, 0, q0, kernel_array(vel0, float), kernel_array(pos0, float),
                   float(gravity), quat, vel, pos)
     return Trajectory(t=t, quat=quat, vel=vel, pos=pos)
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from nav import quaternion as Q
+from nav._numba import ekf as kernels
 from nav.ekf import FilterConfig, run_filter, run_filter_batch
 
 G = 9.81
@@ -165,3 +166,30 @@ def test_rts_smoother_removes_a_velocity_ramp_between_zupt_windows():
     assert np.max(np.abs(filt.vel[gap, 2])) > 0.9 * ramp
     assert np.max(np.abs(smooth.vel[gap, 2])) < 1e-3 * ramp
     assert np.max(np.abs(smooth.pos[gap, 2])) < 0.05 * np.max(np.abs(filt.pos[gap, 2]))
+
+
+def test_read_only_inputs_reuse_the_compiled_filter():
+    """An array's read-only flag is part of its numba type: read-only inputs (broadcast views, a memory-mapped
+    recording) are handed over as writable arrays, so they run the filter already compiled for writable ones
+    instead of compiling it again (about a minute)."""
+    n = 400
+    t = np.arange(n) / 100.0
+    acc = np.tile([0.0, 0.0, 9.81], (n, 1))
+    gyr = np.zeros((n, 3))
+    stationary = np.ones(n, bool)
+    writable = run_filter(t, acc, gyr, stationary, [1.0, 0, 0, 0], stance_velocity=np.zeros((n, 3)))
+    compiled = set(kernels.filter_run.signatures)
+
+    def read_only(x):
+        return np.broadcast_to(np.asarray(x), np.shape(x))
+
+    again = run_filter(read_only(t), read_only(acc), read_only(gyr), read_only(stationary), [1.0, 0, 0, 0],
+                       vel0=read_only(np.zeros(3)), pos0=read_only(np.zeros(3)),
+                       stance_velocity=read_only(np.zeros((n, 3))))
+    assert set(kernels.filter_run.signatures) == compiled
+    np.testing.assert_array_equal(again.pos, writable.pos)
+    # the batch broadcasts what the runs share: each run is handed to the same compiled filter
+    batch = run_filter_batch(t, np.stack([acc, acc]), np.stack([gyr, gyr]), stationary, [[1.0, 0, 0, 0]] * 2,
+                             stance_velocity=np.zeros(3))
+    assert set(kernels.filter_run.signatures) == compiled
+    np.testing.assert_array_equal(batch.pos[1], writable.pos)

@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from nav.ekf import compile_filter
 from nav.files import write_text_atomic
 from nav.storage import sha256
 
@@ -394,7 +395,10 @@ def _pool_outcomes(fn, tasks, pending, workers) -> Iterator[_Outcome]:
 
 def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
     """A local pool of ``workers`` processes under the runner's rules: never forked from a parent holding numba or
-    MuJoCo state, one numba and one BLAS thread each, none outliving the process that started it."""
+    MuJoCo state, one numba and one BLAS thread each, none outliving the process that started it. The navigation
+    filter is compiled here first (:func:`nav.ekf.compile_filter`; loaded from numba's cache when it is there), so
+    that the workers load it rather than each compiling it at once."""
+    compile_filter()
     return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(
         _start_method()), initializer=_start_worker, initargs=(os.getpid(),))
 

@@ -15,4 +15,22 @@ body->world, specific force in m/s^2, rates in rad/s.
 - :mod:`.linalg`: the inverse of a small (at most 3 x 3) symmetric positive definite matrix by Cholesky.
 - :mod:`.covariance`: error-state transition, covariance propagation and the Joseph-form update.
 - :mod:`.ekf`: the forward filter, the RTS pass and the batch over runs.
+
+Callers hand the kernels their arrays through :func:`kernel_array`.
 """
+
+import numpy as np
+
+
+def kernel_array(x, dtype, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``x`` (broadcast to ``shape`` when given) as a C-contiguous, writable array of ``dtype``; a copy only when it
+    is not one already.
+
+    numba compiles a kernel once per tuple of argument types, and an array's read-only flag is part of its
+    type: a read-only input (a broadcast view, a memory-mapped file) would compile it again: for the filter,
+    50-70 s of CPU (its three state counts).
+    """
+    x = np.asarray(x, dtype)
+    if shape is not None:
+        x = np.broadcast_to(x, shape)
+    return np.require(x, dtype, ("C", "W"))
