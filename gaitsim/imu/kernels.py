@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from gaitsim.imu.normals import bit_words, standard_normal
+from gaitsim.imu.normals import standard_normal, with_bit_words
 
 
 @njit(cache=True, inline="always")
@@ -45,12 +45,14 @@ def _add_interpolated(block, nodes, node_step, node, offset):
 
 @njit(cache=True)
 def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk_nodes, walk_step, white_std,
-                          next_uint32, state, resolution, limit):
+                          resolution, limit, generator, state):
     """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each linearly
     interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white noise of std
     ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and ``limit``
     inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it; the
-    terms are added a block at a time in a cache-resident buffer, each in its own simple loop."""
+    terms are added a block at a time in a cache-resident buffer, each in its own simple loop. The normals are
+    drawn from the bit generator (``generator``, ``state``: see :func:`gaitsim.imu.normals.with_bit_words`);
+    returns its state after them."""
     white = white_std[0] != 0.0 or white_std[1] != 0.0 or white_std[2] != 0.0
     finish = resolution > 0.0 or limit < np.inf
     buffer = np.empty((STOCHASTIC_BLOCK, 3))
@@ -66,12 +68,14 @@ def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk
         if white:
             for k in range(block.shape[0]):
                 for c in range(3):
-                    block[k, c] += float(standard_normal(next_uint32, state)) * white_std[c]
+                    normal, state = standard_normal(generator, state)
+                    block[k, c] += float(normal) * white_std[c]
         if finish:
             for k in range(block.shape[0]):
                 for c in range(3):
                     block[k, c] = _quantised(block[k, c], resolution, limit)
         out[start:stop] = block
+    return state
 
 
 @njit(cache=True)
@@ -98,7 +102,6 @@ def add_stochastic_terms(out, signal, instability, walk, white_std, rng, resolut
     """``out`` = ``signal`` + bias instability + random walk (each ``(nodes, node_step)``; no nodes: off) +
     white noise of per-axis std ``white_std`` drawn from ``rng``, then quantised and clipped (see
     :func:`_add_stochastic_terms`); ``out`` may be ``signal``."""
-    with bit_words(rng) as (next_uint32, state):
-        _add_stochastic_terms(out, signal, *instability, *walk, np.asarray(white_std, float), next_uint32, state,
-                              resolution, limit)
+    with_bit_words(rng, _add_stochastic_terms, out, signal, *instability, *walk, np.asarray(white_std, float),
+                   resolution, limit)
 
