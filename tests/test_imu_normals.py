@@ -23,7 +23,7 @@ NO_NODES = (np.zeros((0, 3)), 1)
 
 def add_white_noise(out, sample_std, rng):
     """The compiled pass with white noise alone."""
-    add_stochastic_terms(out, out, NO_NODES, NO_NODES, np.asarray(sample_std, float), rng, 0.0, np.inf)
+    add_stochastic_terms(out, out, (), NO_NODES, NO_NODES, np.asarray(sample_std, float), rng, 0.0, np.inf)
 
 
 def numpy_noise(n, sample_std, rng):
