@@ -1,5 +1,5 @@
-"""Compiled kernels of the IMU model (numba): the stochastic terms, quantisation and clipping in one pass, and
-the nodes of the bias-instability recursion.
+"""Compiled kernels of the IMU model (numba): the deterministic terms' sums, the stochastic terms, quantisation and
+clipping in one pass, and the nodes of the bias-instability recursion.
 
 :mod:`gaitsim.imu.model` uses them for long records, or when numba is already loaded; its numpy path is the
 reference, and both give the same bits (``tests/test_imu_model.py``). This module is imported only then:
@@ -105,6 +105,9 @@ def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) ->
     return nodes
 
 
+_NO_SUMMAND = np.zeros((0, 3))  # no (n, 3) addend
+
+
 def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng, resolution, limit) -> None:
     """``out`` = ``signal`` + each of ``addends`` in turn (:func:`nav.calibration.add_in_order`: an (n, 3) array
     first, then numbers or (3,) vectors) + bias instability + random walk (each ``(nodes, node_step)``; no nodes:
@@ -119,6 +122,4 @@ def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng
     with_bit_words(rng, _add_stochastic_terms, out, signal, summand, offsets, *instability, *walk,
                    np.asarray(white_std, float), resolution, limit)
 
-
-_NO_SUMMAND = np.zeros((0, 3))
 

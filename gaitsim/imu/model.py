@@ -14,7 +14,8 @@ default value):
    instants fall outside it are dropped, so the output may be longer or shorter than the input. The reported timestamp is the sensor's own clock,
    ``t_0 + k dt``, plus white timestamp jitter (std ``timestamp_jitter``).
 3. **Deterministic errors**, through :meth:`nav.calibration.Calibration.distort` (one implementation shared
-   with the compensation)::
+   with the compensation; without temperature terms its sums are done in step 5's pass, in its order:
+   :meth:`~nav.calibration.Calibration.distort_terms`)::
 
        f_m = M_a f + b_a            w_m = M_g w + G_g f + G2_g (f*f) + b_g
 

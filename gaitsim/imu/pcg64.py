@@ -9,8 +9,8 @@ hands out a 32-bit word as the low half of a 64-bit output and keeps the high ha
 (``has_uint32``, ``uinteger`` of the state dict). :func:`next_uint32` does the same on a copy of that state
 held in a tuple of uint64 (:func:`words_of`, written back by :func:`store_words`), passed along from word to
 word so that compiled code keeps it in registers, the 128-bit arithmetic in 64-bit halves:
-``tests/test_imu_normals.py`` checks its words against ``BitGenerator.random_raw`` and numpy's normals, and the
-state it leaves against numpy's.
+``tests/test_imu_normals.py`` checks its words against ``BitGenerator.random_raw``, numpy's own ``next_uint32``
+and numpy's normals, and the state it leaves against numpy's.
 
 PCG64DXSM (another output function and multiplier) and the other bit generators are not covered: their words
 come from their C functions (:func:`gaitsim.imu.normals.with_bit_words`).
@@ -24,9 +24,9 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645  # PCG's default 128-bit multiplier, numpy's for PCG64
-_MULTIPLIER_HIGH = np.uint64(MULTIPLIER >> 64)
-_MULTIPLIER_LOW = np.uint64(MULTIPLIER & (2**64 - 1))
 _MASK64 = 2**64 - 1
+_MULTIPLIER_HIGH = np.uint64(MULTIPLIER >> 64)
+_MULTIPLIER_LOW = np.uint64(MULTIPLIER & _MASK64)
 
 
 @intrinsic
