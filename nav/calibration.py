@@ -159,15 +159,28 @@ class Calibration:
         -------
         (acc_m, gyr_m) : (N, 3) arrays, m/s^2 and rad/s, new arrays (inputs untouched).
         """
+        outputs = []
+        for given, (product, addends) in zip((acc, gyr), self.distort_terms(acc, gyr, terms)):
+            output = product.copy() if product is given else product
+            add_in_order(output, addends)
+            outputs.append(output)
+        return tuple(outputs)
+
+    def distort_terms(self, acc: np.ndarray, gyr: np.ndarray, terms=TERM_GROUPS) -> tuple[tuple, tuple]:
+        """The forward equation as :meth:`distort` evaluates it, its sums not yet done: per sensor the product
+        (``M_a f``, ``M_g w``: a new (N, 3) array, or the input itself, not to be written, where :func:`_product`
+        skips it) and the terms :func:`add_in_order` adds to it, in this order (``b_a``; ``G_g f + G2_g (f*f)``,
+        an (N, 3) array or 0.0, then ``b_g``), for a caller that does the sums in a pass of its own (the
+        simulator's noise pass: ``gaitsim.imu.kernels``) with the same roundings.
+
+        Returns
+        -------
+        ((acc_product, acc_addends), (gyr_product, gyr_addends)) : m/s^2 and rad/s.
+        """
         b_a, M_a, b_g, M_g, G_g, G2_g = self._parts(terms)
         acc = np.asarray(acc, float)
         gyr = np.asarray(gyr, float)
-        acc_m = acc @ M_a.T
-        _add_per_axis(acc_m, b_a)
-        gyr_m = gyr @ M_g.T
-        gyr_m += self._g_terms(acc, G_g, G2_g)
-        _add_per_axis(gyr_m, b_g)
-        return acc_m, gyr_m
+        return (_product(acc, M_a, b_a), (b_a,)), (_product(gyr, M_g, b_g), (self._g_terms(acc, G_g, G2_g), b_g))
 
     def correct(self, acc: np.ndarray, gyr: np.ndarray, terms=TERM_GROUPS) -> tuple[np.ndarray, np.ndarray]:
         """Exact inverse of :meth:`distort` for the chosen ``terms``: readouts -> compensated values.
@@ -191,11 +204,30 @@ class Calibration:
         return acc_c, gyr_c
 
 
-def _add_per_axis(x: np.ndarray, per_axis: np.ndarray) -> None:
-    """x[..., c] += per_axis[c] in place, axis by axis: the sums of ``x + per_axis``, but numpy broadcasts a
-    (3,) vector over (N, 3) rows one 3-element inner loop per row, three times slower."""
-    for c in range(3):
-        x[..., c] += per_axis[c]
+def _product(x: np.ndarray, matrix: np.ndarray, bias: np.ndarray) -> np.ndarray:
+    """``x @ matrix.T`` (N, 3), or ``x`` itself where the product cannot change the bits of the sum it enters,
+    ``x @ matrix.T (+ an (N, 3) term or 0.0) + bias``: ``matrix`` exactly the identity, every ``bias`` element
+    nonzero and ``x`` finite (the BLAS product costs ~6 ns a row). Then each product element is
+    x * 1 + y * 0 + z * 0, exactly x whatever the order of the sum or its fused multiply-adds, when x is nonzero;
+    a zero x comes out as +0 or -0, the sums after it then differ at most in the sign of a zero (+0 + t and
+    -0 + t are equal unless t is a zero), and the bias loses that sign: +-0 + b = b for b != 0. A non-finite
+    element would spread NaN across its row (inf * 0); it is caught by the sum (an inf or NaN makes it
+    non-finite; a sum that overflows only makes the product be taken)."""
+    if np.all(bias != 0.0) and np.array_equal(matrix, np.eye(3)) and np.isfinite(np.sum(x)):
+        return x
+    return x @ matrix.T
+
+
+def add_in_order(x: np.ndarray, addends) -> None:
+    """x (N, 3) += each of ``addends`` in turn, in place: an (N, 3) array, a number, or a (3,) vector per axis
+    (added axis by axis: the sums of ``x + per_axis``, but numpy broadcasts a (3,) vector over (N, 3) rows one
+    3-element inner loop per row, three times slower)."""
+    for addend in addends:
+        if np.ndim(addend) == 1:
+            for c in range(3):
+                x[..., c] += addend[c]
+        else:
+            x += addend
 
 
 def _to_json(cal: Calibration) -> dict:
@@ -289,4 +321,5 @@ def z_scores(estimate: Calibration, truth: Calibration) -> dict[str, np.ndarray]
     return out
 
 
-__all__ = ["Calibration", "CalibrationError", "TERM_GROUPS", "load_calibration", "save_calibration", "z_scores"]
+__all__ = ["Calibration", "CalibrationError", "TERM_GROUPS", "add_in_order", "load_calibration", "save_calibration",
+           "z_scores"]

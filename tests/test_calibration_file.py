@@ -38,6 +38,33 @@ def test_forward_equation_written_out():
         np.testing.assert_allclose(wm, cal.M_g @ w + cal.G_g @ f + cal.G2_g @ (f * f) + cal.b_g, atol=1e-12)
 
 
+@pytest.mark.parametrize("g_sensitivity", [0.0, 1e-3])
+def test_an_identity_matrix_skipped_gives_the_bits_of_the_blas_product(g_sensitivity):
+    """distort skips a product by an exact identity when every bias element is nonzero and the input finite; the
+    output is byte for byte that of the product (signed zeros in the input), and a non-finite input or a zero
+    bias element still takes it (an inf spreads NaN across its row)."""
+    acc, gyr = samples(n=2000)
+    acc[::5], gyr[::3], gyr[1::7, 1] = -0.0, 0.0, -0.0
+
+    def blas_route(cal, acc, gyr):
+        acc_m, gyr_m = acc @ cal.M_a.T, gyr @ cal.M_g.T
+        gyr_m += acc @ cal.G_g.T if g_sensitivity else 0.0
+        for c in range(3):
+            acc_m[:, c] += cal.b_a[c]
+            gyr_m[:, c] += cal.b_g[c]
+        return acc_m, gyr_m
+
+    infinite = acc.copy()
+    infinite[7, 0] = np.inf
+    for b_a, b_g, acc_in in (([0.1, -0.2, 1e-9], [1e-3, -2e-3, 3e-3], acc), ([0.1, -0.0, 1e-9], [0.0, 1.0, 2.0], acc),
+                             ([0.1, -0.2, 1e-9], [1e-3, -2e-3, 3e-3], infinite)):
+        cal = Calibration(b_a=b_a, M_a=np.eye(3), b_g=b_g, M_g=np.eye(3), G_g=np.full((3, 3), g_sensitivity))
+        ours = cal.distort(acc_in, gyr)
+        for got, expected in zip(ours, blas_route(cal, acc_in, gyr)):
+            assert got.tobytes() == expected.tobytes()
+    assert np.isnan(ours[0][7, 1])  # the inf's row: NaN, as the product makes it
+
+
 def test_terms_left_out_are_not_corrected():
     cal = paper_calibration(with_g2=False)
     acc, gyr = samples()

@@ -105,8 +105,15 @@ def every_term_on() -> SensorSpec:
         gyro_bias_instability_tau=0.1)
 
 
-@pytest.mark.parametrize("spec", [get_preset(name) for name in PRESET_NAMES] + [every_term_on()],
-                         ids=[*PRESET_NAMES, "all-terms"])
+def every_term_on_but_temperature() -> SensorSpec:
+    """The deterministic terms' sums done in the noise pass (with temperature on, they are done before it)."""
+    return every_term_on().replace(accel_temp_bias=0.0, gyro_temp_bias=0.0, accel_temp_scale=0.0,
+                                   gyro_temp_scale=0.0)
+
+
+@pytest.mark.parametrize("spec", [get_preset(name) for name in PRESET_NAMES] + [every_term_on(),
+                                                                                   every_term_on_but_temperature()],
+                         ids=[*PRESET_NAMES, "all-terms", "all-but-temperature"])
 def test_compiled_kernels_and_numpy_reference_give_the_same_bits(spec, monkeypatch):
     t, acc, gyr = walking_like_truth(n=20_011)
     outputs = []
@@ -116,6 +123,23 @@ def test_compiled_kernels_and_numpy_reference_give_the_same_bits(spec, monkeypat
     assert all(np.array_equal(a, b) for a, b in zip(*outputs))
     if spec.name != "ideal":
         assert not np.array_equal(outputs[0][1], acc)
+
+
+@pytest.mark.parametrize("implementation", [kernels, model], ids=["compiled", "numpy"])
+def test_deterministic_sums_in_the_noise_pass_are_distorts_bits(implementation, monkeypatch):
+    """Without temperature terms the biases and G_g f are added in the noise pass: the bits of
+    Calibration.distort, compared byte for byte, on inputs and biases holding signed zeros."""
+    monkeypatch.setattr(model, "_implementation", lambda n: implementation)
+    t, acc, gyr = walking_like_truth(n=5000)
+    acc[::7], gyr[::5], gyr[1::5, 1] = -0.0, -0.0, 0.0
+    limit = 1e3  # the clip makes the noise pass run; nothing reaches it
+    for spec in (only(accel_bias=[-0.0, 0.0, 0.1], gyro_bias=[-0.0, -0.0, 0.0], accel_range=limit, gyro_range=limit,
+                      gyro_misalignment=np.diag([1.0, 1.0, 1.001])),
+                 only(gyro_g_sensitivity=np.full((3, 3), 1e-3), gyro_bias=[-0.0, 0.0, 1e-3], gyro_range=limit)):
+        _, acc_m, gyr_m = run(spec, t, acc, gyr)
+        expected = spec.deterministic().distort(acc, gyr)
+        assert acc_m.tobytes() == expected[0].tobytes() and gyr_m.tobytes() == expected[1].tobytes()
+        assert np.any(acc_m == 0.0) and np.any(gyr_m == 0.0)
 
 
 def test_saturation_clips_exactly_at_range():

@@ -1,15 +1,18 @@
 """The compiled white noise (gaitsim.imu.normals, in the stochastic pass of gaitsim.imu.kernels) draws numpy's
 float32 normals bit for bit and leaves the Generator where numpy leaves it: on random words of every numpy bit
-generator, and on crafted words at every edge of the ziggurat (each layer's bound, the wedge tests next to
-their decision, the tail)."""
+generator (PCG64's drawn by the compiled twin of gaitsim.imu.pcg64, whose words and state are also checked
+against numpy's own), and on crafted words at every edge of the ziggurat (each layer's bound, the wedge tests
+next to their decision, the tail)."""
 
 import math
 
 import numpy as np
 import pytest
+from numba import njit
 
+from gaitsim.imu import pcg64
 from gaitsim.imu.kernels import add_stochastic_terms
-from gaitsim.imu.normals import ziggurat_tables
+from gaitsim.imu.normals import next_uint32, with_bit_words, ziggurat_tables
 
 BIT_GENERATORS = (np.random.PCG64, np.random.PCG64DXSM, np.random.SFC64, np.random.Philox, np.random.MT19937)
 BOUND, WIDTH, DENSITY = ziggurat_tables()
@@ -20,7 +23,7 @@ NO_NODES = (np.zeros((0, 3)), 1)
 
 def add_white_noise(out, sample_std, rng):
     """The compiled pass with white noise alone."""
-    add_stochastic_terms(out, out, NO_NODES, NO_NODES, np.asarray(sample_std, float), rng, 0.0, np.inf)
+    add_stochastic_terms(out, out, (), NO_NODES, NO_NODES, np.asarray(sample_std, float), rng, 0.0, np.inf)
 
 
 def numpy_noise(n, sample_std, rng):
@@ -40,6 +43,63 @@ def test_equals_numpy_draws_and_state(bit_generator, n, half_word_left):
     assert np.array_equal(out, 2.0 + numpy_noise(n, sample_std, theirs))
     assert str(ours.bit_generator.state) == str(theirs.bit_generator.state)
     assert ours.random() == theirs.random()
+
+
+@njit(cache=True)
+def _compiled_words(count, generator, state):
+    """(count 32-bit words, state after them) from ``next_uint32``."""
+    words = np.empty(count, np.uint32)
+    for i in range(count):
+        words[i], state = next_uint32(generator, state)
+    return words, state
+
+
+@njit(cache=True)
+def _compiled_raw(count, increment, state):
+    """``count`` 64-bit outputs of the compiled PCG64 and its (high, low) state after them."""
+    high, low = state[0], state[1]
+    outputs = np.empty(count, np.uint64)
+    for i in range(count):
+        outputs[i], high, low = pcg64.next_uint64(increment, high, low)
+    return outputs, (high, low, state[2], state[3])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 12345, 2**63 + 7, 2**127 + 3])
+def test_compiled_pcg64_outputs_equal_random_raw_and_leave_its_state(seed):
+    ours, theirs = np.random.PCG64(seed), np.random.PCG64(seed)
+    increment, state = pcg64.words_of(ours)
+    outputs, state = _compiled_raw(1001, increment, state)
+    pcg64.store_words(ours, increment, state)
+    assert np.array_equal(outputs, theirs.random_raw(1001))
+    assert ours.state == theirs.state
+
+
+@pytest.mark.parametrize("count", [1, 2, 7, 1000, 1001])
+@pytest.mark.parametrize("seed", range(8))
+def test_compiled_pcg64_words_equal_numpys_c_function_and_leave_its_state(seed, count):
+    """The 32-bit words, buffered high halves included, against numpy's own ``next_uint32``, from a state
+    with and without a buffered half."""
+    ours, theirs = np.random.PCG64(seed), np.random.PCG64(seed)
+    theirs_next = theirs.ctypes.next_uint32
+    for start in range(2):  # with a buffered half word at the second pass
+        increment, state = pcg64.words_of(ours)
+        words, state = _compiled_words(count + start, increment, state)
+        pcg64.store_words(ours, increment, state)
+        expected = [theirs_next(theirs.ctypes.state_address) for _ in range(count + start)]
+        assert words.tolist() == expected
+        assert ours.state == theirs.state
+
+
+def test_only_plain_pcg64_takes_the_compiled_generator():
+    """PCG64DXSM and a subclass of PCG64 keep their C function (their words may differ from PCG64's)."""
+
+    class Sub(np.random.PCG64):
+        pass
+
+    seen = []
+    for bit_generator in (np.random.PCG64(1), np.random.PCG64DXSM(1), Sub(1)):
+        with_bit_words(np.random.Generator(bit_generator), lambda generator, state: seen.append(generator) or state)
+    assert isinstance(seen[0], tuple) and not isinstance(seen[1], tuple) and not isinstance(seen[2], tuple)
 
 
 def test_equals_numpy_on_a_long_stream_with_thousands_of_tail_draws():

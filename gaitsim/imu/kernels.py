@@ -1,5 +1,5 @@
-"""Compiled kernels of the IMU model (numba): the stochastic terms, quantisation and clipping in one pass, and
-the nodes of the bias-instability recursion.
+"""Compiled kernels of the IMU model (numba): the deterministic terms' sums, the stochastic terms, quantisation and
+clipping in one pass, and the nodes of the bias-instability recursion.
 
 :mod:`gaitsim.imu.model` uses them for long records, or when numba is already loaded; its numpy path is the
 reference, and both give the same bits (``tests/test_imu_model.py``). This module is imported only then:
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from gaitsim.imu.normals import bit_words, standard_normal
+from gaitsim.imu.normals import standard_normal, with_bit_words
 
 
 @njit(cache=True, inline="always")
@@ -44,13 +44,16 @@ def _add_interpolated(block, nodes, node_step, node, offset):
 
 
 @njit(cache=True)
-def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk_nodes, walk_step, white_std,
-                          next_uint32, state, resolution, limit):
-    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each linearly
-    interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white noise of std
-    ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and ``limit``
-    inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it; the
-    terms are added a block at a time in a cache-resident buffer, each in its own simple loop."""
+def _add_stochastic_terms(out, signal, summand, offsets, instability_nodes, instability_step, walk_nodes,
+                          walk_step, white_std, resolution, limit, generator, state):
+    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + ``summand`` (n, 3; none when it has no rows) + each
+    row of ``offsets`` (K, 3) per axis in turn (the deterministic terms' sums) + bias instability + random walk
+    (each linearly interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white
+    noise of std ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and
+    ``limit`` inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it;
+    the terms are added a block at a time in a cache-resident buffer, each in its own simple loop. The normals
+    are drawn from the bit generator (``generator``, ``state``: see :func:`gaitsim.imu.normals.with_bit_words`);
+    returns its state after them."""
     white = white_std[0] != 0.0 or white_std[1] != 0.0 or white_std[2] != 0.0
     finish = resolution > 0.0 or limit < np.inf
     buffer = np.empty((STOCHASTIC_BLOCK, 3))
@@ -59,6 +62,12 @@ def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk
         stop = min(out.shape[0], start + STOCHASTIC_BLOCK)
         block = buffer[: stop - start]
         block[:] = signal[start:stop]
+        if summand.shape[0]:
+            block += summand[start:stop]
+        for offset in offsets:
+            for k in range(block.shape[0]):
+                for c in range(3):
+                    block[k, c] += offset[c]
         if instability_nodes.shape[0]:
             instability_at = _add_interpolated(block, instability_nodes, instability_step, *instability_at)
         if walk_nodes.shape[0]:
@@ -66,12 +75,14 @@ def _add_stochastic_terms(out, signal, instability_nodes, instability_step, walk
         if white:
             for k in range(block.shape[0]):
                 for c in range(3):
-                    block[k, c] += float(standard_normal(next_uint32, state)) * white_std[c]
+                    normal, state = standard_normal(generator, state)
+                    block[k, c] += float(normal) * white_std[c]
         if finish:
             for k in range(block.shape[0]):
                 for c in range(3):
                     block[k, c] = _quantised(block[k, c], resolution, limit)
         out[start:stop] = block
+    return state
 
 
 @njit(cache=True)
@@ -94,11 +105,21 @@ def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) ->
     return nodes
 
 
-def add_stochastic_terms(out, signal, instability, walk, white_std, rng, resolution, limit) -> None:
-    """``out`` = ``signal`` + bias instability + random walk (each ``(nodes, node_step)``; no nodes: off) +
-    white noise of per-axis std ``white_std`` drawn from ``rng``, then quantised and clipped (see
+_NO_SUMMAND = np.zeros((0, 3))  # no (n, 3) addend
+
+
+def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng, resolution, limit) -> None:
+    """``out`` = ``signal`` + each of ``addends`` in turn (:func:`nav.calibration.add_in_order`: an (n, 3) array
+    first, then numbers or (3,) vectors) + bias instability + random walk (each ``(nodes, node_step)``; no nodes:
+    off) + white noise of per-axis std ``white_std`` drawn from ``rng``, then quantised and clipped (see
     :func:`_add_stochastic_terms`); ``out`` may be ``signal``."""
-    with bit_words(rng) as (next_uint32, state):
-        _add_stochastic_terms(out, signal, *instability, *walk, np.asarray(white_std, float), next_uint32, state,
-                              resolution, limit)
+    summand = _NO_SUMMAND
+    if addends and np.ndim(addends[0]) == 2:
+        summand, addends = addends[0], addends[1:]
+    if any(np.ndim(addend) == 2 for addend in addends):
+        raise ValueError("an (n, 3) addend must come first")
+    offsets = np.array([np.broadcast_to(np.asarray(addend, float), 3) for addend in addends]).reshape(-1, 3)
+    with_bit_words(rng, _add_stochastic_terms, out, signal, summand, offsets, *instability, *walk,
+                   np.asarray(white_std, float), resolution, limit)
+
 

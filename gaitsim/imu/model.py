@@ -14,7 +14,8 @@ default value):
    instants fall outside it are dropped, so the output may be longer or shorter than the input. The reported timestamp is the sensor's own clock,
    ``t_0 + k dt``, plus white timestamp jitter (std ``timestamp_jitter``).
 3. **Deterministic errors**, through :meth:`nav.calibration.Calibration.distort` (one implementation shared
-   with the compensation)::
+   with the compensation; without temperature terms its sums are done in step 5's pass, in its order:
+   :meth:`~nav.calibration.Calibration.distort_terms`)::
 
        f_m = M_a f + b_a            w_m = M_g w + G_g f + G2_g (f*f) + b_g
 
@@ -60,7 +61,7 @@ from gaitsim.errors import ScenarioError
 from gaitsim.imu.allan import BIAS_INSTABILITY_FLOOR, GAUSS_MARKOV_PEAK
 from gaitsim.imu.units import si_unit
 from nav import quaternion
-from nav.calibration import Calibration
+from nav.calibration import Calibration, add_in_order
 
 FILTER_KINDS = ("digital", "analogue")  # where the bandwidth low-pass sits (module docstring, step 6)
 
@@ -244,14 +245,16 @@ def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) ->
     return np.ascontiguousarray(np.array(columns).T)
 
 
-def add_stochastic_terms(out: np.ndarray, signal: np.ndarray, instability: tuple, walk: tuple,
+def add_stochastic_terms(out: np.ndarray, signal: np.ndarray, addends: tuple, instability: tuple, walk: tuple,
                          white_std: np.ndarray, rng: np.random.Generator, resolution: float, limit: float) -> None:
-    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + bias instability + random walk (each a pair
+    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + each of ``addends`` in turn (the deterministic terms'
+    sums: :func:`nav.calibration.add_in_order`) + bias instability + random walk (each a pair
     (nodes (J, 3), node_step), linearly interpolated between the nodes; no nodes: off) + white noise of
     per-axis std ``white_std`` (3,) (float32 normals from ``rng``; all zero: off), then quantised and clipped
     (:func:`quantise_and_clip`), each sum rounded in this order."""
     if out is not signal:
         out[:] = signal
+    add_in_order(out, addends)
     samples = np.arange(out.shape[0])
     for nodes, node_step in (instability, walk):
         if nodes.shape[0]:
@@ -443,14 +446,16 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
     turn_on = {s: streams[f"{s}_turn_on"].standard_normal(3) * p[f"{s}_bias_repeatability"]
                if np.any(p[f"{s}_bias_repeatability"]) else np.zeros(3) for s in ("accel", "gyro")}
     deterministic = spec.deterministic(turn_on["accel"], turn_on["gyro"])
-    if _is_identity(deterministic):
-        acc_m, gyr_m = acc, gyr  # not copied: step 5 writes the output arrays (a pass over memory saved)
-    else:
-        acc_m, gyr_m = deterministic.distort(acc, gyr)
-
-    # 4. temperature
     scale_on = np.any(p["accel_temp_scale"]) or np.any(p["gyro_temp_scale"])
     bias_on = np.any(p["accel_temp_bias"]) or np.any(p["gyro_temp_bias"])
+    if _is_identity(deterministic):  # not copied: step 5 writes the output arrays (a pass over memory saved)
+        (acc_m, acc_addends), (gyr_m, gyr_addends) = (acc, ()), (gyr, ())
+    elif scale_on or bias_on:
+        (acc_m, gyr_m), acc_addends, gyr_addends = deterministic.distort(acc, gyr), (), ()
+    else:  # the sums are done in step 5's pass
+        (acc_m, acc_addends), (gyr_m, gyr_addends) = deterministic.distort_terms(acc, gyr)
+
+    # 4. temperature
     if scale_on or bias_on:
         if acc_m is acc:
             acc_m, gyr_m = acc.copy(), gyr.copy()
@@ -461,7 +466,7 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
     # 5.-7. stochastic terms, bandwidth, quantisation and saturation: one pass unless a bandwidth is on
     implementation = _implementation(n)
     measured = []
-    for signal, s in ((acc_m, "accel"), (gyr_m, "gyro")):
+    for signal, addends, s in ((acc_m, acc_addends, "accel"), (gyr_m, gyr_addends, "gyro")):
         instability, walk = _NO_NODES, _NO_NODES
         if np.any(p[f"{s}_bias_instability"]):
             instability = gauss_markov_nodes(n, dt, p[f"{s}_bias_instability"], float(p[f"{s}_bias_instability_tau"]),
@@ -473,13 +478,13 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
         filtered = np.isfinite(bandwidth)
         resolution_now, limit_now = (0.0, np.inf) if filtered else (resolution, limit)  # else after the filter
         given = signal is acc or signal is gyr  # an input array: never written, the output is a new array
-        if instability is _NO_NODES and walk is _NO_NODES and not np.any(white_std) and not resolution_now and \
-                limit_now == np.inf:
+        if not addends and instability is _NO_NODES and walk is _NO_NODES and not np.any(white_std) and \
+                not resolution_now and limit_now == np.inf:
             out = signal.copy() if given else signal  # nothing to add
         else:
             out = np.empty_like(signal) if given else signal
-            implementation.add_stochastic_terms(out, signal, instability, walk, white_std, streams[f"{s}_white"],
-                                                resolution_now, limit_now)
+            implementation.add_stochastic_terms(out, signal, addends, instability, walk, white_std,
+                                                streams[f"{s}_white"], resolution_now, limit_now)
         if filtered:
             out = low_pass(out, bandwidth, rate_hz, spec.filter_order, spec.filter_kind)
             implementation.quantise_and_clip(out, resolution, limit)

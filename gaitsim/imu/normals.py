@@ -2,12 +2,13 @@
 
 numpy draws a float32 standard normal with a 256-layer ziggurat (Marsaglia and Tsang, J. Stat. Softw. 5(8),
 2000) on the 32-bit words of its bit generator. Called through ``Generator.standard_normal``, that costs
-about 10 ns per normal here, most of it outside the bit generator and the ziggurat. :func:`add_white_noise`
+about 10 ns per normal here, most of it outside the bit generator and the ziggurat. :func:`standard_normal`
 runs the same ziggurat, with the same tables and the same float32 arithmetic, in compiled code (the IMU
-model's stochastic pass, :mod:`gaitsim.imu.kernels`) that takes the words from the bit generator's own C
-function (``BitGenerator.ctypes.next_uint32``): the normals are the ones numpy gives, bit for bit, and the
-Generator is left in the state numpy leaves it in (``tests/test_imu_normals.py``), so a seeded run gives the
-sensor output it gave before.
+model's stochastic pass, :mod:`gaitsim.imu.kernels`) on the same 32-bit words: a PCG64's (numpy's default)
+from its compiled twin (:mod:`gaitsim.imu.pcg64`), any other bit generator's from its own C function
+(``BitGenerator.ctypes.next_uint32``). The normals are the ones numpy gives, bit for bit, and the Generator is
+left in the state numpy leaves it in (``tests/test_imu_normals.py``), so a seeded run gives the sensor output
+it gave before.
 
 The ziggurat: a 23-bit magnitude ``m``, a sign bit and an 8-bit layer ``i`` are read from one 32-bit word;
 ``m * w[i]`` is returned when ``m < k[i]`` (about 99 % of draws); else the wedge of layer ``i`` is tested
@@ -19,10 +20,12 @@ tail start ``r`` and layer area ``v`` numpy uses.
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
+
+from gaitsim.imu import pcg64
 
 LAYERS = 256
 TAIL_START = 3.6541528853610088  # r: start of the tail of the base layer
@@ -64,48 +67,78 @@ def _layer_draw(word):
     return layer, magnitude, np.float32(magnitude) * _WIDTH[layer] * sign
 
 
+def next_uint32(generator, state):
+    """(word, state): the next 32-bit word of a bit generator and its state after it, in compiled code:
+    ``generator`` is the bit generator's C function ``next_uint32`` and ``state`` its state address (which does
+    not change), or a PCG64's increment and state (:mod:`gaitsim.imu.pcg64`); see :func:`with_bit_words`."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(next_uint32)
+def _next_uint32(generator, state):
+    if isinstance(generator, types.ExternalFunctionPointer):
+        def from_c_function(generator, state):
+            return generator(state), state
+
+        return from_c_function
+
+    def from_pcg64(generator, state):
+        return pcg64.next_uint32(generator, state)
+
+    return from_pcg64
+
+
 @njit(cache=True, inline="always")
-def _uniform(next_uint32, state):
-    """A float32 uniform in [0, 1) from the top 24 bits of the next 32-bit word."""
-    return np.float32(next_uint32(state) >> np.uint32(8)) * _UNIFORM_STEP
+def _uniform(generator, state):
+    """(u, state): a float32 uniform in [0, 1) from the top 24 bits of the next 32-bit word."""
+    word, state = next_uint32(generator, state)
+    return np.float32(word >> np.uint32(8)) * _UNIFORM_STEP, state
 
 
 @njit(cache=True)
-def _rejected(next_uint32, state, layer, magnitude, x):
-    """The normal whose first draw (layer, magnitude, x) fell outside its layer's rectangle: the wedge or
-    tail test, then new draws until one is accepted."""
+def _rejected(generator, state, layer, magnitude, x):
+    """(normal, state): the normal whose first draw (layer, magnitude, x) fell outside its layer's rectangle:
+    the wedge or tail test, then new draws until one is accepted."""
     while True:
         if layer == 0:  # the tail beyond r, by Marsaglia's exponential method (with this draw's sign)
             sign = np.float32(1.0) - np.float32(2.0) * np.float32((magnitude >> np.uint32(8)) & np.uint32(1))
             while True:
-                excess = -_INVERSE_TAIL_START * np.float32(math.log1p(-_uniform(next_uint32, state)))
-                exponential = -np.float32(math.log1p(-_uniform(next_uint32, state)))
+                u, state = _uniform(generator, state)
+                excess = -_INVERSE_TAIL_START * np.float32(math.log1p(-u))
+                u, state = _uniform(generator, state)
+                exponential = -np.float32(math.log1p(-u))
                 if exponential + exponential > excess * excess:
-                    return (_TAIL_START + excess) * sign
-        u = _uniform(next_uint32, state)  # the wedge of the layer
+                    return (_TAIL_START + excess) * sign, state
+        u, state = _uniform(generator, state)  # the wedge of the layer
         if (_DENSITY[layer - 1] - _DENSITY[layer]) * u + _DENSITY[layer] < math.exp(-0.5 * float(x) * float(x)):
-            return x
-        layer, magnitude, x = _layer_draw(next_uint32(state))
+            return x, state
+        word, state = next_uint32(generator, state)
+        layer, magnitude, x = _layer_draw(word)
         if magnitude < _BOUND[layer]:
-            return x
+            return x, state
 
 
 @njit(cache=True, inline="always")
-def standard_normal(next_uint32, state):
-    """One float32 standard normal from the 32-bit words ``next_uint32(state)`` of a numpy bit generator
-    (compiled code only; see :func:`bit_words`)."""
-    layer, magnitude, x = _layer_draw(next_uint32(state))
+def standard_normal(generator, state):
+    """(normal, state): one float32 standard normal from the 32-bit words of a numpy bit generator and the
+    generator's state after it (compiled code only; see :func:`with_bit_words`)."""
+    word, state = next_uint32(generator, state)
+    layer, magnitude, x = _layer_draw(word)
     if magnitude >= _BOUND[layer]:  # about 1 % of draws
-        x = _rejected(next_uint32, state, layer, magnitude, x)
-    return x
+        x, state = _rejected(generator, state, layer, magnitude, x)
+    return x, state
 
 
-@contextmanager
-def bit_words(rng: np.random.Generator):
-    """(next_uint32, state address) of the Generator's bit generator for :func:`standard_normal`, its lock
-    held (as numpy holds it while it draws)."""
+def with_bit_words(rng: np.random.Generator, kernel, *arguments):
+    """``kernel(*arguments, generator, state)`` (compiled; it draws with :func:`standard_normal` and returns the
+    state after its last draw) run on the Generator's bit generator, its lock held (as numpy holds it while it
+    draws): a PCG64 (numpy's default) as compiled code on a copy of its state, stored back afterwards, any other
+    through its C function ``next_uint32``."""
     bit_generator = rng.bit_generator
-    interface = bit_generator.ctypes
     with bit_generator.lock:
-        yield interface.next_uint32, interface.state_address
-
+        if type(bit_generator) is np.random.PCG64:
+            increment, state = pcg64.words_of(bit_generator)
+            pcg64.store_words(bit_generator, increment, kernel(*arguments, increment, state))
+        else:
+            interface = bit_generator.ctypes
+            kernel(*arguments, interface.next_uint32, interface.state_address)
