@@ -119,6 +119,9 @@ def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng
     if any(np.ndim(addend) == 2 for addend in addends):
         raise ValueError("an (n, 3) addend must come first")
     offsets = np.array([np.broadcast_to(np.asarray(addend, float), 3) for addend in addends]).reshape(-1, 3)
+    # numba compiles the pass once per array type, layout and read-only flag included: a strided or read-only
+    # input is copied rather than compiled for (as nav._numba.kernel_array does for the filter)
+    signal, summand = (np.require(x, float, ("C", "W")) for x in (signal, summand))
     with_bit_words(rng, _add_stochastic_terms, out, signal, summand, offsets, *instability, *walk,
                    np.asarray(white_std, float), resolution, limit)
 
