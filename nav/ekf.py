@@ -30,7 +30,7 @@ import numba
 import numpy as np
 
 from ._numba import ekf as kernels
-from ._numba import kernel_array
+from .compiled import kernel_array
 from .constants import DEFAULT_GRAVITY
 from .strapdown import mechanisation_mode
 

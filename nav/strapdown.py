@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .constants import DEFAULT_GRAVITY
-from ._numba import kernel_array
+from .compiled import kernel_array
 from ._numba.strapdown import MODE_INCREMENTS, MODE_POINT_SAMPLES, strapdown_run
 
 METHODS = ("rk4", "increments")

@@ -9,9 +9,14 @@ more than a short record's whole sensor stage.
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 from numba import njit
 
+from nav.compiled import drop_stale_compilations, kernel_array
+
+from gaitsim.imu import normals, pcg64
 from gaitsim.imu.normals import standard_normal, with_bit_words
 
 
@@ -119,10 +124,9 @@ def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng
     if any(np.ndim(addend) == 2 for addend in addends):
         raise ValueError("an (n, 3) addend must come first")
     offsets = np.array([np.broadcast_to(np.asarray(addend, float), 3) for addend in addends]).reshape(-1, 3)
-    # numba compiles the pass once per array type, layout and read-only flag included: a strided or read-only
-    # input is copied rather than compiled for (as nav._numba.kernel_array does for the filter)
-    signal, summand = (np.require(x, float, ("C", "W")) for x in (signal, summand))
+    signal, summand = kernel_array(signal, float), kernel_array(summand, float)  # one compiled type
     with_bit_words(rng, _add_stochastic_terms, out, signal, summand, offsets, *instability, *walk,
                    np.asarray(white_std, float), resolution, limit)
 
 
+drop_stale_compilations([pcg64, normals, sys.modules[__name__]])  # this pass inlines the other two modules' code

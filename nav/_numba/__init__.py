@@ -4,8 +4,9 @@ Everything here works on plain float64 arrays, allocates its work buffers once p
 ``cache=True`` so a new process does not recompile. The helpers the filter calls every sample (the increments, the
 nominal state's advance, the propagation, the store, the update and its injection) are inlined into it
 (``inline="always"``): a call hands each array over as its separate fields (pointer, shape, strides, ...), which cost
-about 110 ns per 15-state sample, a seventh of the filter. numba's cache does not see a change in a callee's file:
-after editing one, delete nav/_numba/__pycache__ (or touch ekf.py) or the filter keeps its old compiled code.
+about 110 ns per 15-state sample, a seventh of the filter. numba's cache does not see a change in a callee's file;
+importing this package drops the cached code whenever any of its modules changed
+(:func:`nav.compiled.drop_stale_compilations`).
 Frames and units are those of the package: world ENU (m, m/s), body frame of the sensor, quaternions (w, x, y, z)
 body->world, specific force in m/s^2, rates in rad/s.
 
@@ -16,21 +17,12 @@ body->world, specific force in m/s^2, rates in rad/s.
 - :mod:`.covariance`: error-state transition, covariance propagation and the Joseph-form update.
 - :mod:`.ekf`: the forward filter, the RTS pass and the batch over runs.
 
-Callers hand the kernels their arrays through :func:`kernel_array`.
+Callers hand the kernels their arrays through :func:`nav.compiled.kernel_array`.
 """
 
-import numpy as np
+from ..compiled import drop_stale_compilations
+from . import covariance, ekf, linalg, quat, strapdown
+
+drop_stale_compilations([quat, linalg, strapdown, covariance, ekf])
 
 
-def kernel_array(x, dtype, shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """``x`` (broadcast to ``shape`` when given) as a C-contiguous, writable array of ``dtype``; a copy only when it
-    is not one already.
-
-    numba compiles a kernel once per tuple of argument types, and an array's read-only flag is part of its
-    type: a read-only input (a broadcast view, a memory-mapped file) would compile it again: for the filter,
-    50-70 s of CPU (its three state counts).
-    """
-    x = np.asarray(x, dtype)
-    if shape is not None:
-        x = np.broadcast_to(x, shape)
-    return np.require(x, dtype, ("C", "W"))
