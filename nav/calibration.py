@@ -161,7 +161,8 @@ class Calibration:
         """
         outputs = []
         for given, (product, addends) in zip((acc, gyr), self.distort_terms(acc, gyr, terms)):
-            output = product.copy() if product is given else product
+            # the product may be the input's own memory (:func:`_product`; a memmap or a DataFrame's values too)
+            output = product.copy() if np.may_share_memory(product, given) else product
             add_in_order(output, addends)
             outputs.append(output)
         return tuple(outputs)
@@ -180,6 +181,7 @@ class Calibration:
         b_a, M_a, b_g, M_g, G_g, G2_g = self._parts(terms)
         acc = np.asarray(acc, float)
         gyr = np.asarray(gyr, float)
+        # each bias is the last addend of its sum: _product's skip relies on it
         return (_product(acc, M_a, b_a), (b_a,)), (_product(gyr, M_g, b_g), (self._g_terms(acc, G_g, G2_g), b_g))
 
     def correct(self, acc: np.ndarray, gyr: np.ndarray, terms=TERM_GROUPS) -> tuple[np.ndarray, np.ndarray]:
@@ -213,7 +215,9 @@ def _product(x: np.ndarray, matrix: np.ndarray, bias: np.ndarray) -> np.ndarray:
     -0 + t are equal unless t is a zero), and the bias loses that sign: +-0 + b = b for b != 0. A non-finite
     element would spread NaN across its row (inf * 0); it is caught by the sum (an inf or NaN makes it
     non-finite; a sum that overflows only makes the product be taken)."""
-    if np.all(bias != 0.0) and np.array_equal(matrix, np.eye(3)) and np.isfinite(np.sum(x)):
+    with np.errstate(over="ignore", invalid="ignore"):  # a huge finite input may overflow the sum: then no skip
+        finite = np.isfinite(np.sum(x))
+    if np.all(bias != 0.0) and np.array_equal(matrix, np.eye(3)) and finite:
         return x
     return x @ matrix.T
 

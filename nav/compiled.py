@@ -3,11 +3,10 @@
 - :func:`kernel_array`: the arrays handed to a compiled kernel. numba compiles a kernel once per tuple of argument
   types, and an array's type holds its layout and read-only flag: a strided or read-only input (a broadcast view,
   a memory-mapped file) would compile it again (for nav's filter, 50-70 s of CPU).
-- :func:`drop_stale_compilations`: numba's cache (``cache=True``) keys each function's compiled code on its own
-  source file's time stamp and size. A function that inlines or calls another module's function keeps its
-  compiled code when only that module changes, and goes on running the old code. Calling this after importing
-  a package's compiled modules drops their cached code whenever any of their sources differs from the sources
-  it was compiled from.
+- :func:`key_cache_to_sources`: numba's cache (``cache=True``) keys each function's compiled code on its own
+  source file alone. A function that inlines or calls another module's function kept its compiled code when only
+  that module changed, and went on running the old code. Keyed on the sources of every module of its package
+  instead, each process saves and accepts only code compiled from the sources it imported.
 """
 
 from __future__ import annotations
@@ -19,14 +18,12 @@ from types import ModuleType
 import numpy as np
 from numba.core.dispatcher import Dispatcher
 
-SOURCES_STAMP = "compiled-sources.sha256"  # file beside the cached code: the digest of the sources it came from
-
 
 def kernel_array(x, dtype, shape: tuple[int, ...] | None = None) -> np.ndarray:
     """``x`` (broadcast to ``shape`` when given) as a C-contiguous, writable array of ``dtype``; a copy only when it
     is not one already (see the module docstring)."""
     x = np.asarray(x, dtype)
-    if shape is not None:
+    if shape is not None and x.shape != tuple(shape):
         x = np.broadcast_to(x, shape)
     return np.require(x, dtype, ("C", "W"))
 
@@ -39,31 +36,19 @@ def sources_digest(modules: list[ModuleType]) -> str:
     return digest.hexdigest()
 
 
-def drop_stale_compilations(modules: list[ModuleType]) -> bool:
-    """Empty the numba cache of every cached function of ``modules`` when their sources (all of them together,
-    :func:`sources_digest`) differ from those the cache was written for, and record the new digest beside it
-    (:data:`SOURCES_STAMP`). Call it once the modules are imported, before any of their functions runs.
+def key_cache_to_sources(modules: list[ModuleType]) -> None:
+    """Key the numba cache of every cached function defined in ``modules`` on the sources of all of them
+    (:func:`sources_digest`) as well as its own file. Call it once the modules are imported, before any of their
+    functions runs.
 
-    Returns
-    -------
-    True when cached code was dropped (or there was no record of its sources).
+    numba stamps an index with its function's source stamp and ignores an index whose stamp differs from its
+    own; the digest is added to that stamp (a private attribute of numba's cache file: tests/test_compiled_cache.py
+    pins the behaviour). Nothing is written here, and a process still running older sources saves code under
+    their stamp, which a process with the new sources does not load.
     """
-    cached = [obj for module in modules for obj in vars(module).values()
-              if isinstance(obj, Dispatcher) and obj._cache.cache_path is not None and obj.__module__ == module.__name__]
-    if not cached:
-        return False
-    stamp = Path(cached[0]._cache.cache_path) / SOURCES_STAMP
     digest = sources_digest(modules)
-    try:
-        if stamp.read_text() == digest:
-            return False
-    except OSError:  # no record yet: a fresh cache, or one written before the record existed
-        pass
-    for dispatcher in cached:
-        dispatcher._cache.flush()
-    try:
-        stamp.parent.mkdir(parents=True, exist_ok=True)
-        stamp.write_text(digest)
-    except OSError:  # a read-only cache: numba then compiles in memory
-        pass
-    return True
+    for module in modules:
+        for obj in vars(module).values():
+            if isinstance(obj, Dispatcher) and obj.__module__ == module.__name__ and obj._cache.cache_path is not None:
+                cache_file = obj._cache._cache_file
+                cache_file._source_stamp = (cache_file._source_stamp, digest)

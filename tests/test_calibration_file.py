@@ -65,6 +65,20 @@ def test_an_identity_matrix_skipped_gives_the_bits_of_the_blas_product(g_sensiti
     assert np.isnan(ours[0][7, 1])  # the inf's row: NaN, as the product makes it
 
 
+def test_distort_never_writes_into_its_inputs_even_where_the_identity_product_is_skipped(tmp_path):
+    """The skipped product is the input's own memory; a view of it (a memory-mapped file, a DataFrame's values)
+    must come out of distort untouched, and a read-only one must not be written either."""
+    acc, gyr = samples(n=500)
+    cal = Calibration(b_a=[0.1, -0.2, 0.3], M_a=np.eye(3), b_g=[1e-3, -2e-3, 3e-3], M_g=np.eye(3), G_g=np.zeros((3, 3)))
+    path = tmp_path / "acc.npy"
+    np.save(path, acc)
+    for mode in ("r+", "r"):
+        mapped = np.load(path, mmap_mode=mode)
+        acc_m, _ = cal.distort(mapped, gyr)
+        np.testing.assert_array_equal(np.load(path), acc)
+        np.testing.assert_array_equal(acc_m, acc + cal.b_a)
+
+
 def test_terms_left_out_are_not_corrected():
     cal = paper_calibration(with_g2=False)
     acc, gyr = samples()

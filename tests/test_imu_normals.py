@@ -45,7 +45,7 @@ def test_equals_numpy_draws_and_state(bit_generator, n, half_word_left):
     assert ours.random() == theirs.random()
 
 
-@njit(cache=True)
+@njit  # not cached: it inlines the package's generator, and a test must run the code as it is now
 def _compiled_words(count, generator, state):
     """(count 32-bit words, state after them) from ``next_uint32``."""
     words = np.empty(count, np.uint32)
@@ -54,7 +54,7 @@ def _compiled_words(count, generator, state):
     return words, state
 
 
-@njit(cache=True)
+@njit  # not cached (as _compiled_words)
 def _compiled_raw(count, increment, state):
     """``count`` 64-bit outputs of the compiled PCG64 and its (high, low) state after them."""
     high, low = state[0], state[1]

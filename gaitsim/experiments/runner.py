@@ -58,7 +58,6 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from nav.ekf import compile_filter
 from nav.files import write_text_atomic
 from nav.storage import sha256
 
@@ -398,6 +397,8 @@ def process_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
     MuJoCo state, one numba and one BLAS thread each, none outliving the process that started it. The navigation
     filter is compiled here first (:func:`nav.ekf.compile_filter`; loaded from numba's cache when it is there), so
     that the workers load it rather than each compiling it at once."""
+    from nav.ekf import compile_filter  # here: importing the runner alone does not load numba
+
     compile_filter()
     return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(
         _start_method()), initializer=_start_worker, initargs=(os.getpid(),))

@@ -14,7 +14,7 @@ import sys
 import numpy as np
 from numba import njit
 
-from nav.compiled import drop_stale_compilations, kernel_array
+from nav.compiled import kernel_array, key_cache_to_sources
 
 from gaitsim.imu import normals, pcg64
 from gaitsim.imu.normals import standard_normal, with_bit_words
@@ -129,4 +129,4 @@ def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng
                    np.asarray(white_std, float), resolution, limit)
 
 
-drop_stale_compilations([pcg64, normals, sys.modules[__name__]])  # this pass inlines the other two modules' code
+key_cache_to_sources([pcg64, normals, sys.modules[__name__]])  # this pass inlines the other two modules' code

@@ -482,7 +482,8 @@ def apply_sensor(spec: SensorSpec, t: np.ndarray, acc: np.ndarray, gyr: np.ndarr
                 not resolution_now and limit_now == np.inf:
             out = signal.copy() if given else signal  # nothing to add
         else:
-            out = np.empty_like(signal) if given else signal
+            in_place = not given and signal.flags.c_contiguous and signal.flags.writeable
+            out = signal if in_place else np.empty(signal.shape)  # C order: the pass's one compiled type
             implementation.add_stochastic_terms(out, signal, addends, instability, walk, white_std,
                                                 streams[f"{s}_white"], resolution_now, limit_now)
         if filtered:

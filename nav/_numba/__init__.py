@@ -4,9 +4,9 @@ Everything here works on plain float64 arrays, allocates its work buffers once p
 ``cache=True`` so a new process does not recompile. The helpers the filter calls every sample (the increments, the
 nominal state's advance, the propagation, the store, the update and its injection) are inlined into it
 (``inline="always"``): a call hands each array over as its separate fields (pointer, shape, strides, ...), which cost
-about 110 ns per 15-state sample, a seventh of the filter. numba's cache does not see a change in a callee's file;
-importing this package drops the cached code whenever any of its modules changed
-(:func:`nav.compiled.drop_stale_compilations`).
+about 110 ns per 15-state sample, a seventh of the filter. numba's cache keys a function on its own file
+alone; importing this package keys it on all of the package's modules (:func:`nav.compiled.key_cache_to_sources`),
+so an edit of a callee reaches the filter.
 Frames and units are those of the package: world ENU (m, m/s), body frame of the sensor, quaternions (w, x, y, z)
 body->world, specific force in m/s^2, rates in rad/s.
 
@@ -20,9 +20,9 @@ body->world, specific force in m/s^2, rates in rad/s.
 Callers hand the kernels their arrays through :func:`nav.compiled.kernel_array`.
 """
 
-from ..compiled import drop_stale_compilations
+from ..compiled import key_cache_to_sources
 from . import covariance, ekf, linalg, quat, strapdown
 
-drop_stale_compilations([quat, linalg, strapdown, covariance, ekf])
+key_cache_to_sources([quat, linalg, strapdown, covariance, ekf])
 
 
