@@ -126,6 +126,26 @@ def test_compiled_kernels_and_numpy_reference_give_the_same_bits(spec, monkeypat
 
 
 @pytest.mark.parametrize("implementation", [kernels, model], ids=["compiled", "numpy"])
+def test_a_sensor_with_biases_alone_leaves_its_truth_untouched_whatever_its_memory_order(implementation, monkeypatch):
+    """Biases alone on every axis (identity matrices: the product distort skips, so the noise pass reads the
+    truth itself): the output is distort's, byte for byte, for C- and F-ordered and read-only truth, and the
+    truth is not written."""
+    monkeypatch.setattr(model, "_implementation", lambda n: implementation)
+    t, acc, gyr = walking_like_truth(n=5000)
+    spec = only(accel_bias=[0.1, -0.2, 0.3], gyro_bias=[1e-3, -2e-3, 3e-3], accel_noise_density=1e-4)
+    outputs = []
+    for order in (np.ascontiguousarray, np.asfortranarray):
+        acc_in, gyr_in = order(acc.copy()), order(gyr.copy())
+        acc_in.flags.writeable = gyr_in.flags.writeable = False
+        outputs.append(run(spec, t, acc_in, gyr_in)[1:])
+        np.testing.assert_array_equal(acc_in, acc)
+        np.testing.assert_array_equal(gyr_in, gyr)
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(*outputs))
+    gyr_m = outputs[0][1]
+    assert gyr_m.tobytes() == spec.deterministic().distort(acc, gyr)[1].tobytes()  # the gyro has no noise
+
+
+@pytest.mark.parametrize("implementation", [kernels, model], ids=["compiled", "numpy"])
 def test_deterministic_sums_in_the_noise_pass_are_distorts_bits(implementation, monkeypatch):
     """Without temperature terms the biases and G_g f are added in the noise pass: the bits of
     Calibration.distort, compared byte for byte, on inputs and biases holding signed zeros."""
