@@ -24,5 +24,3 @@ from ..compiled import key_cache_to_sources
 from . import covariance, ekf, linalg, quat, strapdown
 
 key_cache_to_sources([quat, linalg, strapdown, covariance, ekf])
-
-
