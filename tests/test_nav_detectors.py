@@ -5,6 +5,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import DATA, needs_data
+from gaitsim.measured import load_dataset
 from nav import detectors as D
 from nav.constants import DEFAULT_SIGMA_A
 
@@ -39,6 +41,50 @@ def test_statistic_equals_hand_computation(name, window):
     sa, sg = 0.01, math.radians(0.1)
     got = D.statistic(name, acc, gyr, sa, sg, window, G)
     np.testing.assert_allclose(got, hand_statistics(acc, gyr, sa, sg, window)[name], rtol=1e-9, atol=1e-6)
+
+
+def bits(x):
+    return np.ascontiguousarray(x).view(np.uint64)
+
+
+@pytest.mark.parametrize("window", [1, 2, 3, 5, 9])
+def test_compiled_shoe_statistic_is_the_numpy_one_bit_for_bit(window):
+    # a miscalibrated, quantised, clipped sensor with NaN samples, in a batch of runs with its own leading axes
+    rng = np.random.default_rng(window)
+    acc = np.array([0.3, -0.2, G]) + rng.normal(0, 1, (2, 3, 500, 3)) * np.geomspace(1e-3, 30, 500)[:, None]
+    gyr = rng.normal(0, 1, acc.shape) * np.geomspace(1e-4, 10, 500)[:, None]
+    acc, gyr = np.clip(np.round(acc, 3), -156.9, 156.9), np.round(gyr, 4)
+    acc[0, 1, 100], gyr[1, 2, 300] = np.nan, np.nan
+    got = D.statistic("shoe", acc, gyr, 0.01, math.radians(0.1), window, G)
+    want = D.numpy_statistic("shoe", acc, gyr, 0.01, math.radians(0.1), window, G)
+    assert got.shape == want.shape == (2, 3, 500 - window + 1)
+    np.testing.assert_array_equal(bits(got), bits(want))
+    assert np.isnan(got[0, 1, 100 - window + 1: 101]).all() and np.isnan(got[1, 2, 300 - window + 1: 301]).all()
+    # one run alone, a strided view and a gyro broadcast against the batch give the same windows
+    np.testing.assert_array_equal(bits(D.statistic("shoe", acc[1, 0], gyr[1, 0], 0.01, math.radians(0.1), window, G)),
+                                  bits(want[1, 0]))
+    np.testing.assert_array_equal(bits(D.statistic("shoe", acc[..., ::-1, :], gyr[..., ::-1, :], 0.01,
+                                                   math.radians(0.1), window, G)),
+                                  bits(D.numpy_statistic("shoe", acc[..., ::-1, :], gyr[..., ::-1, :], 0.01,
+                                                         math.radians(0.1), window, G)))
+    np.testing.assert_array_equal(bits(D.statistic("shoe", acc, gyr[0, 0], 0.01, math.radians(0.1), window, G)),
+                                  bits(D.numpy_statistic("shoe", acc, np.broadcast_to(gyr[0, 0], acc.shape), 0.01,
+                                                         math.radians(0.1), window, G)))
+
+
+@needs_data("xio-ngimu")
+def test_compiled_shoe_statistic_is_the_numpy_one_on_a_measured_recording():
+    rec = load_dataset("xio-ngimu", DATA)[0]
+    got = D.statistic("shoe", rec.acc, rec.gyr, 0.01, math.radians(0.1), 3, G)
+    np.testing.assert_array_equal(bits(got), bits(D.numpy_statistic("shoe", rec.acc, rec.gyr, 0.01,
+                                                                      math.radians(0.1), 3, G)))
+
+
+def test_a_window_longer_than_the_recording_is_refused_by_both_paths():
+    _, acc, gyr = signals(n=4)
+    for statistic in (D.statistic, D.numpy_statistic):
+        with pytest.raises(ValueError, match="window 5 samples is not in 1..4"):
+            statistic("shoe", acc, gyr, 0.01, 0.01, 5)
 
 
 def test_shoe_uses_each_windows_own_gravity_direction():

@@ -1,4 +1,5 @@
-"""Compiled (numba) inner loops of the strapdown and the error-state EKF; private: use nav.strapdown and nav.ekf.
+"""Compiled (numba) inner loops of the strapdown, the error-state EKF and the SHOE detector; private: use
+nav.strapdown, nav.ekf and nav.detectors.
 
 Everything here works on plain float64 arrays, allocates its work buffers once per run and is compiled with
 ``cache=True`` so a new process does not recompile. The helpers the filter calls every sample (the increments, the
@@ -16,11 +17,12 @@ body->world, specific force in m/s^2, rates in rad/s.
 - :mod:`.linalg`: the inverse of a small (at most 3 x 3) symmetric positive definite matrix by Cholesky.
 - :mod:`.covariance`: error-state transition, covariance propagation and the Joseph-form update.
 - :mod:`.ekf`: the forward filter, the RTS pass and the batch over runs.
+- :mod:`.detector`: the SHOE statistic of the zero-velocity detector.
 
 Callers hand the kernels their arrays through :func:`nav.compiled.kernel_array`.
 """
 
 from ..compiled import key_cache_to_sources
-from . import covariance, ekf, linalg, quat, strapdown
+from . import covariance, detector, ekf, linalg, quat, strapdown
 
-key_cache_to_sources([quat, linalg, strapdown, covariance, ekf])
+key_cache_to_sources([quat, linalg, strapdown, covariance, ekf, detector])
