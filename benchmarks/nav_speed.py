@@ -1,6 +1,6 @@
 """Throughput of the shared ZUPT-aided EKF (nav) against gaitmap's RtsKalman, side by side on one recording.
 
-    python benchmarks/nav_speed.py [--repeats 3] [--runs 64]
+    python benchmarks/nav_speed.py [--repeats 5] [--runs 64]
 
 Recording: the simulator's 99.6 m straight walk (scenarios/straight_100m.toml, 800 Hz) when gaitsim.simulate is
 available, else a synthetic 75 s, 800 Hz walk-like signal. Both filters get the same point samples (ours: RK4
@@ -14,7 +14,9 @@ with the RTS smoother (gaitmap's RtsKalman is a 9-state filter with a full RTS p
 like-for-like pair), gaitmap, the ratios, and the batch of 64 runs in one compiled call against the same 64 runs
 one call each, of the filter alone (no detection), both keeping every run's result and both in samples per CPU
 second of this process (what a core delivers whatever the load; wall-clock rates per thread are printed too but
-fall when other jobs share the cores).
+fall when other jobs share the cores). Peers are timed in rounds, each call once per round in turn
+(:func:`interleaved_seconds`); a ratio is printed as the ratio of the best times with the median and range of the
+ratios within rounds.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from nav.ekf import FilterConfig, run_filter, run_filter_batch
 from nav.recording import Recording
 
 ROOT = Path(__file__).resolve().parents[1]
+GAITMAP = "gaitmap RtsKalman (9-state + RTS)"
 
 
 def load_recording() -> tuple[Recording, str]:
@@ -60,15 +63,28 @@ def synthetic_recording(duration=75.0, fs=800.0, seed=0) -> Recording:
     return Recording(t=t, acc=acc, gyr=gyr)
 
 
-def best_time(fn, repeats: int, clock=time.perf_counter) -> float:
-    """Shortest time (s) of ``repeats`` calls on ``clock``: wall by default, ``time.process_time`` for the CPU time
-    of all threads of this process."""
-    times = []
-    for _ in range(repeats):
-        t0 = clock()
-        fn()
-        times.append(clock() - t0)
-    return min(times)
+def interleaved_seconds(calls: dict, rounds: int, clock=time.perf_counter) -> dict:
+    """{label: (rounds,) seconds}: every round times each call of ``calls`` ({label: callable}) once, in turn, on
+    ``clock`` (wall by default, ``time.process_time`` for the CPU time of all threads of this process).
+
+    Timing the calls one after another within each round keeps the peers of a ratio side by side: this machine
+    (a 2-vCPU VM) runs the same compiled filter at 740 ns per sample for some seconds and at 1,200-1,500 ns for the
+    next, in one process and in CPU time alike, so the best of one call's repeats taken before another's can pair
+    a fast stretch with a slow one (one such run printed 7.7x against gaitmap where interleaved rounds give more)."""
+    seconds = {label: [] for label in calls}
+    for _ in range(rounds):
+        for label, call in calls.items():
+            start = clock()
+            call()
+            seconds[label].append(clock() - start)
+    return {label: np.array(times) for label, times in seconds.items()}
+
+
+def ratio_text(faster: np.ndarray, slower: np.ndarray) -> str:
+    """The ratio of the best times, and the median and range of the per-round ratios (slower / faster)."""
+    per_round = slower / faster
+    return (f"{slower.min() / faster.min():.2f}x (rounds: median {np.median(per_round):.2f}x, "
+            f"{per_round.min():.2f}-{per_round.max():.2f}x)")
 
 
 def ours(rec: Recording, states: int, rts: bool, history: bool = True):
@@ -99,35 +115,34 @@ def gaitmap_runner(rec: Recording):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3, help="timed repeats, best kept (default 3)")
+    parser.add_argument("--repeats", type=int, default=5,
+                        help="timed rounds, each timing every filter once in turn; the best of each kept (default 5)")
     parser.add_argument("--runs", type=int, default=64, help="runs in the lock-step batch (default 64)")
     args = parser.parse_args(argv)
 
     rec, description = load_recording()
     n = rec.n
     print(f"recording: {description}; {n} samples")
-    rows = {}
+    calls = {}
     for label, states, rts, history in (("nav 15-state, forward", 15, False, True),
                                         ("nav 15-state, forward, trajectory only", 15, False, False),
                                         ("nav 15-state + RTS", 15, True, True), ("nav 9-state + RTS", 9, True, True)):
-        ours(rec, states, rts, history)  # compile / warm up
-        rows[label] = n / best_time(lambda: ours(rec, states, rts, history), args.repeats)
-
+        calls[label] = lambda states=states, rts=rts, history=history: ours(rec, states, rts, history)
+        calls[label]()  # compile / warm up
     gaitmap = gaitmap_runner(rec)
     if gaitmap is None:
         print("gaitmap is not installed (optional extra: pip install '.[bench]'); skipping the comparison")
     else:
-        rows["gaitmap RtsKalman (9-state + RTS)"] = n / best_time(gaitmap, args.repeats)
-    width = max(len(k) for k in rows)
-    for label, rate in rows.items():
-        print(f"  {label:<{width}}  {rate:>12,.0f} samples/s")
+        calls[GAITMAP] = gaitmap
+    seconds = interleaved_seconds(calls, args.repeats)
+    width = max(len(k) for k in calls)
+    for label, times in seconds.items():
+        print(f"  {label:<{width}}  {n / times.min():>12,.0f} samples/s")
+    print(f"  (best of {args.repeats} rounds, each timing every filter once in turn)")
     if gaitmap is not None:
-        g = rows["gaitmap RtsKalman (9-state + RTS)"]
-        print(f"  ratio nav 15-state forward / gaitmap : {rows['nav 15-state, forward'] / g:.1f}x  (target >= 15x)")
-        print(f"  ratio nav 15-state forward, trajectory only / gaitmap : "
-              f"{rows['nav 15-state, forward, trajectory only'] / g:.1f}x")
-        print(f"  ratio nav 15-state + RTS  / gaitmap : {rows['nav 15-state + RTS'] / g:.1f}x")
-        print(f"  ratio nav 9-state + RTS   / gaitmap : {rows['nav 9-state + RTS'] / g:.1f}x  (like for like; target >= 10x)")
+        for label, note in (("nav 15-state, forward", "  target >= 15x"), ("nav 15-state, forward, trajectory only", ""),
+                            ("nav 15-state + RTS", ""), ("nav 9-state + RTS", "  like for like; target >= 10x")):
+            print(f"  ratio {label} / gaitmap: {ratio_text(seconds[label], seconds[GAITMAP])}{note}")
 
     # batch: the same walk with independent sensor noise per run, all runs in one compiled call
     rng = np.random.default_rng(1)
@@ -153,16 +168,17 @@ def main(argv=None) -> int:
 
     batch()  # compile
     singles(1)
-    seconds = best_time(batch, args.repeats)
-    cpu_batch = best_time(batch, args.repeats, time.process_time)
-    cpu_single = best_time(singles, args.repeats, time.process_time) / args.runs
+    wall = interleaved_seconds({"batch": batch}, args.repeats)["batch"].min()
+    cpu = interleaved_seconds({"batch": batch, "singles": singles}, args.repeats, time.process_time)
+    cpu_batch, cpu_single = cpu["batch"].min(), cpu["singles"].min() / args.runs
     threads = numba.get_num_threads()
-    total = args.runs * n / seconds
+    total = args.runs * n / wall
     print(f"  batch {args.runs} runs x {n} samples, 15-state forward, trajectory only: {total:,.0f} samples/s wall on "
-          f"{threads} threads ({total / threads:,.0f} per thread, {seconds:.2f} s); "
+          f"{threads} threads ({total / threads:,.0f} per thread, {wall:.2f} s); "
           f"{args.runs * n / cpu_batch:,.0f} samples per CPU second")
     print(f"  single runs of the same filter (no detection): {n / cpu_single:,.0f} samples per CPU second; "
-          f"batch / single per CPU second: {cpu_single * args.runs / cpu_batch:.2f}x (target > 1)")
+          f"batch / single per CPU second: {ratio_text(cpu['batch'], cpu['singles'])} "
+          "(target > 1)")
     if not math.isfinite(total):
         return 1
     return 0
