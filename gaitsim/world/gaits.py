@@ -55,30 +55,36 @@ Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
   without it the push-off pitch stays above level at every running cadence (tests/test_gaits.py); swing height
   0.15 m; the stance micro-motion's ramps and pulses shortened to fit a ~0.06 s foot flat;
 - after toe off the foot keeps turning toes down until a swing pitch maximum stops it
-  (``pitch_accel_to_swing_max_dps2``, :func:`gaitsim.world.profile.swing_maximum`): the toe-off rate brought to
-  zero by a steady deceleration at the walking recordings' reversal (``WALK_TOE_OFF_ACCEL``, -6350 deg/s^2 at
-  103 steps/min) scaled with the cadence squared as for the walking kinds (-13500 / -16300 / -19400 deg/s^2 at
-  150 / 165 / 180 steps/min). The maximum comes 74 / 61 / 52 ms after toe off (15 / 13 / 12 % of the swing) at
-  37 / 31 / 26 deg above the toe-off pitch: 107 / 100 / 95 deg (median; 94-109 over strides and cadences), toes
-  down and pointing slightly back, the sole facing backward. The same law puts the walking kinds' own swing
-  maximum, made by their toe-off reversal, within 0.5 ms and 0.01 deg (tests/test_gaits.py). No published running foot-segment angle through swing was
-  found to check it against (searched: foot segment / foot-to-ground angle in running swing, foot-IMU pitch
-  in running; the running studies found report the angle at contact only: Falbriard et al., Front Bioeng
-  Biotechnol 8:65, 2020; foot strike angle: Altman & Davis above): an extrapolation of a walking measurement
-  by the walking kinds' cadence law, not a running fit. The knot keeps the deceleration (zero rate, acceleration
-  a, jerk a^2 / toe-off rate: the acceleration relaxes in the time it took to stop the rotation); a flat
-  maximum (zero acceleration) was a still foot in mid-swing that nav's default detector took for a stance (10-16
-  false updates per 60 m at 800 Hz). Before this knot the swing pitch was one Hermite from toe off to contact and
-  rose to 164-185 deg (toes pointing backward, sole up), which gave the rearfoot strike its 1335-1374 deg/s by
-  sweeping ~185 deg back before its heel strike. Both strikes now peak at their toe-off rate, 1000-1040 deg/s
-  (30 m runs at 150, 165 and 180 steps/min), below the published ~1500: a known miss (strict xfails in
-  tests/test_gaits.py); the peak specific force stays 13.8-15.0 g. A faster rotation at toe off or a return that
-  reverses before contact would raise it, but no measurement found gives either for these runners: forefoot
-  strikers land with the ankle plantarflexed and the shank more vertical, their plantarflexors switched on
-  earlier (Ahn et al., J Sport Health Sci 3:102-112, 2014), with less tibialis anterior and more gastrocnemius
-  activity than rearfoot strikers in terminal swing (Yong, Silder & Delp, J Biomech 47:3593-3597, 2014); and no
-  published foot-IMU peak rate of forefoot strikers alone was found (the ~1500 deg/s below pools running up to
-  6.4 m/s);
+  (``pitch_accel_to_swing_max_dps2``, :func:`gaitsim.world.profile.swing_maximum`): the toe-off rate brought to zero by
+  a steady deceleration at the walking recordings' reversal (``WALK_TOE_OFF_ACCEL``, -6350 deg/s^2 at 103 steps/min)
+  scaled with the cadence squared as for the walking kinds (-13500 / -16300 / -19400 deg/s^2 at 150 / 165 / 180
+  steps/min). The maximum comes 74 / 61 / 52 ms after toe off (15 / 13 / 12 % of the swing) at 37 / 31 / 26 deg above
+  the toe-off pitch: 107 / 100 / 95 deg (median; 94-109 over strides and cadences), toes down and pointing slightly
+  back, the sole facing backward. The same law puts the walking kinds' own swing maximum, made by their toe-off
+  reversal, within 0.5 ms and 0.01 deg (tests/test_gaits.py). No publication giving the running foot-segment angle
+  through swing was found to check it against (searched: foot segment / foot-to-ground angle in running swing, foot-IMU
+  pitch in running; the running studies found report the angle at contact only: Falbriard et al., Front Bioeng
+  Biotechnol 8:65, 2020; foot strike angle: Altman & Davis above): an extrapolation of a walking measurement by the
+  walking kinds' cadence law, not a running fit. The knot keeps the deceleration (zero rate, acceleration a, jerk a^2 /
+  toe-off rate: the acceleration relaxes in the time it took to stop the rotation); a flat maximum (zero acceleration)
+  was a still foot in mid-swing that nav's default detector took for a stance (10-16 false updates per 60 m at 800 Hz).
+  Before this knot the swing pitch was one Hermite from toe off to contact and rose to 164-185 deg (toes pointing
+  backward, sole up), which gave the rearfoot strike its 1335-1374 deg/s by sweeping ~185 deg back before its heel
+  strike. Both strikes now peak at their toe-off rate, 1000-1040 deg/s (30 m runs at 150, 165 and 180 steps/min), below
+  the published ~1500: a known miss (strict xfails in tests/test_gaits.py); the peak specific force stays 13.8-15.0 g. A
+  faster rotation at toe off or a return that reverses before contact would raise it, but no measurement found gives
+  either for these runners: forefoot strikers land with the ankle plantarflexed and the shank more vertical, their
+  plantarflexors switched on earlier (Ahn et al., J Sport Health Sci 3:102-112, 2014), with less tibialis anterior and
+  more gastrocnemius activity than rearfoot strikers in terminal swing (Yong, Silder & Delp, J Biomech 47:3593-3597,
+  2014); and no published foot-IMU peak rate of forefoot strikers alone was found (the ~1500 deg/s below pools running
+  up to 6.4 m/s). One measured trace disagrees with the swing maximum and the toe-off rate above: the sagittal foot
+  angle of one treadmill runner from the Running Injury Clinic's motion-capture pipeline (repository
+  regifukuchi/BMC-RIC-running-biomechanics, data/L_foot_angle_mat.txt, 200 Hz, ~185 steps/min, speed not given;
+  differentiated for issue 17) lands at 17 deg toes up (a rearfoot strike), turns toes down at up to 520-550 deg/s to an
+  83 deg maximum at 61 % of the cycle, and is fastest in late swing, 620-640 deg/s toes up about 85 ms before contact;
+  its rollover peaks at 340-360 deg/s. One runner of unknown speed, smoothed by the pipeline's filter (which lowers
+  rates more than angles): not fitted here, but it puts the foot's toe-off rotation and swing maximum below this model's
+  and the sagittal peak in late swing;
 - a running foot is never still: it pitches (heel rise from 30 deg/s) and rolls (25 deg/s held) through its
   short foot flat, so the stance's calmest rate is ~28 deg/s (median over strides; 15-49 deg/s with the
   stride-to-stride variation of the stance rates). The value is bounded by measurements, not fitted to one: the
@@ -94,10 +100,11 @@ recordings and the seed paper's VN-200 walk); running about 1500 deg/s and 15 g 
 saturation of the accelerometer or gyro of some IMU designs in running, up to 6.4 m/s, spoils ZUPT gait parameters:
 Potter et al., Sensors 19(11):2601, 2019). Where the running peak falls: the foot's pitch-rate extremes mark toe off
 and foot contact (Falbriard et al., Front. Physiol. 9:610, 2018), as here (the peak is the toe-off rate). Not
-reproduced: the rearfoot strikers' heel-to-toe rollover, whose peak sagittal rate is 846 deg/s (mean, the lowest of
-five midsole stiffnesses; Braeuer et al., Sensors 21(15):5010, 2021) against 250 / 265 / 424 deg/s here at 150 /
-165 / 180 steps/min (median over strides): it would take a heel rocker of about 30 ms instead of 73 ms at 165
-steps/min, which the stance timing above does not give.
+reproduced: the rearfoot strikers' heel-to-toe rollover, whose peak sagittal rate is 846 deg/s (the mean
+for the shoe of medium midsole bending stiffness, the lowest of the five shoes' means; Braeuer et al., Sensors
+21(15):5010, 2021) against 250 / 265 / 424 deg/s here at 150 / 165 / 180 steps/min (median over strides): it
+would take a heel rocker of about 30 ms instead of 73 ms at 165 steps/min, which the stance timing above does not
+give. (The motion-captured runner above rolls over at 340-360 deg/s.)
 """
 
 from __future__ import annotations
