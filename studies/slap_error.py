@@ -23,7 +23,9 @@ The sensor-to-marker rotation: the loader's (Kabsch on the angular rates) leaves
 off the vertical, because a rate dominated by the sagittal swing fixes the rotation about that axis poorly. Here
 its tilt is taken from gravity instead (the mean direction of the specific force over the detected stances against
 the marker frame's vertical, the smallest rotation between them); the rotation about the vertical stays the
-rates'. The reference's own uncertainties are shown by moving the lever arm by 2 cm and the clock by 2 ms.
+rates'. The reference's own uncertainties are shown by moving the lever arm by 2 cm and the clock by 2 ms, and by
+the lever arm's x and z fitted on the slaps alone (:func:`slap_lever_arm`), where the split of the landing between
+heel strike and slap is decided.
 
 The diagnostic is checked on the stance twin (:mod:`gaitsim.stance.twin`, ideal sensor): with the exact truth pose
 the errors must vanish up to RK4's on point samples; the truth resampled at 100 Hz and low-passed like the Vicon
@@ -32,7 +34,7 @@ the errors must vanish up to RK4's on point samples; the truth resampled at 100 
 Named hypotheses (:func:`hypotheses`) correct the recording for one sensor error each and re-run b and c; the
 integration is also repeated on an 8 times finer grid of the band-limited interpolation (:func:`fine_strapdown`).
 
-Run from the repository root (it reads ../shared/data; ~30 s)::
+Run from the repository root (it reads ../shared/data; ~45 s)::
 
     python3 -m studies.slap_error
 """
@@ -80,6 +82,7 @@ STEPS = {"swing": ("previous stance", "initial contact"), "heel strike": ("initi
          "loading": ("after the slap", "stance"), "stride": ("previous stance", "stance")}
 GAP_MARGIN_S = 0.05  # s, windows this close to a marker dropout are left out
 FINE_FACTOR = 8  # the finer integration's grid: 8 x 204.8 Hz
+SLAP_FIT_HZ = 20.0  # Hz, band of the lever arm fitted on the slaps (12-30 Hz give x within 1.3 cm of it)
 BLOCK_S = 0.02  # s, the errors are averaged over this block around each point (the reference's noise)
 
 
@@ -330,6 +333,35 @@ def vicon_poses(side: str, rec, lever_shift=(0.0, 0.0, 0.0), clock_shift: float 
     return poses, {"clock_offset_s": offset, "lever_arm_m": lever, "mount_tilt_deg": tilt_deg}
 
 
+def slap_lever_arm(side: str, rec, windows: list[Window], cutoff_hz: float = SLAP_FIT_HZ) -> tuple[np.ndarray, dict]:
+    """(3,) m, marker frame: the loader's lever arm with its x and z fitted like the loader's
+    (:func:`gaitsim.measured.mocap.fit_lever_arm`) but on the slaps alone (FF - 30 ms to FF + 40 ms of every window)
+    and at ``cutoff_hz`` instead of 6 Hz: there the sagittal rate stops at 200+ rad/s^2, and its tangential
+    acceleration fixes the point's x and z against the pivot. A rotation about y says nothing of y, which stays the
+    loader's. Also {"loader", "slaps"}: the rms (m/s^2) of the slap samples' specific-force misfit with either."""
+    t_mocap, markers, _ = read_markers(DATA)
+    pose = gaitmap_foot_pose(side, DATA)
+    filled = {k: mount_rate.filled_markers(v, t_mocap) for k, v in markers[side].items()}
+    origin, rotation = mocap.marker_frame(filled["FCC"], filled["TOE"], filled["FM5"], side)
+    mount, _ = gravity_tilted_mount(rec, Slerp(t_mocap, Rotation.from_matrix(rotation)), pose.mount_rotation,
+                                    pose.clock_offset)
+    kin = mocap.body_kinematics(origin, rotation, MOCAP_RATE_HZ, cutoff_hz)
+    t = np.asarray(rec.t, float)
+    on_imu = t_mocap - pose.clock_offset
+    use = np.zeros(len(t_mocap), bool)
+    for w in windows:
+        ff = w.first_time + w.events["ff"]
+        use |= (on_imu >= ff + POINTS["heel rocker"][1]) & (on_imu <= ff + POINTS["after the slap"][1])
+    force = np.full((len(t_mocap), 3), np.nan)
+    acc = CubicSpline(t, mocap.lowpass(rec.acc, cutoff_hz, 1.0 / np.median(np.diff(t))))(on_imu[use])
+    force[use] = np.einsum("nij,jk,nk->ni", kin.rotation[use], mount, acc)
+    fitted = mocap.fit_lever_arm(kin, force, use)[0]
+    lever = np.array([fitted[0], pose.lever_arm[1], fitted[2]])
+    misfit = {name: float(np.sqrt(np.mean(np.sum((force[use] - kin.point_specific_force(arm)[use]) ** 2, axis=1))))
+              for name, arm in (("loader", pose.lever_arm), ("slaps", lever))}
+    return lever, misfit
+
+
 def twin_poses(truth) -> dict:
     """{"exact": the truth, cutoff: the truth sampled at the Vicon's rate and low-passed like it}."""
     t100 = np.arange(truth.t[0], truth.t[-1], 1.0 / MOCAP_RATE_HZ)
@@ -462,7 +494,7 @@ def real_table(feet) -> dict:
     return out
 
 
-def sensitivity_table(feet) -> None:
+def sensitivity_table(feet, slap_levers: dict) -> None:
     print("\n### The reference's uncertainties: the steps (b ; c, forward / up, mm/s, medians) with the pose changed\n")
     variants = {"as fitted": {}, "lever arm x -2 cm": {"lever_shift": (-0.02, 0, 0)},
                 "lever arm x +2 cm": {"lever_shift": (0.02, 0, 0)}, "lever arm y -2 cm": {"lever_shift": (0, -0.02, 0)},
@@ -472,7 +504,13 @@ def sensitivity_table(feet) -> None:
     print("| foot | pose | " + " | ".join(STEPS) + " |")
     print("|---|---|" + "---|" * len(STEPS))
     for side, rec, _ in feet:
-        for label, change in variants.items():
+        loader_lever = vicon_poses(side, rec)[1]["lever_arm_m"]
+        slap_lever, misfit = slap_levers[side]
+        print(f"| {side} | lever arm (cm, marker frame): the loader's {np.round(100 * loader_lever, 1)}, fitted on the "
+              f"slaps at {SLAP_FIT_HZ:g} Hz {np.round(100 * slap_lever, 1)}; the slaps' specific-force misfit "
+              f"{misfit['loader']:.2f} against {misfit['slaps']:.2f} m/s^2 rms |" + " |" * (len(STEPS) - 1))
+        for label, change in {**variants, "lever arm fitted on the slaps": {"lever_shift": slap_lever - loader_lever}
+                              }.items():
             poses, _ = vicon_poses(side, rec, **change)
             cutoffs = CUTOFFS_HZ if label == "as fitted" else (None,)
             for c in cutoffs:
@@ -482,7 +520,7 @@ def sensitivity_table(feet) -> None:
                                                            for i in range(len(STEPS))) + " |")
 
 
-def profile_table(windows: dict) -> None:
+def profile_table(windows: dict, slap_windows: dict) -> None:
     grid = np.round(np.arange(-0.16, 0.0601, 0.01), 3)
     print("\n### When: mean error over strides around forefoot contact (FF), from FF - 160 ms (mm/s; abs(f): median, "
           "m/s^2)\n")
@@ -496,6 +534,10 @@ def profile_table(windows: dict) -> None:
         print(f"| {side} | pitch error (deg) | " + " | ".join(f"{np.degrees(x):+.2f}" for x in pr["pitch"][:, 0])
               + " |")
         print(f"| {side} | abs(f) | " + " | ".join(f"{x:.0f}" for x in pr["force"][:, 0]) + " |")
+        pr = profile(slap_windows[side], grid)
+        for q in ("b", "c"):
+            print(f"| {side} | {q} up, lever arm fitted on the slaps | " + " | ".join(f"{1000 * x:+.0f}"
+                                                                               for x in pr[q][:, 1]) + " |")
 
 
 def impact_impulse(w: Window) -> float:
@@ -574,8 +616,12 @@ def main() -> None:
         feet = list(gaitmap_feet())
         twin_table(feet)
         windows = real_table(feet)
-        sensitivity_table(feet)
-        profile_table(windows)
+        slap_levers = {side: slap_lever_arm(side, rec, windows[side]) for side, rec, _ in feet}
+        sensitivity_table(feet, slap_levers)
+        slap_windows = {side: stance_windows(rec, vicon_poses(side, rec, lever_shift=slap_levers[side][0]
+                                                              - vicon_poses(side, rec)[1]["lever_arm_m"])[0][None])
+                        for side, rec, _ in feet}
+        profile_table(windows, slap_windows)
         slap_force_table(feet, windows)
         hypothesis_table(feet, windows)
 
