@@ -80,6 +80,12 @@ def test_compiled_shoe_statistic_is_the_numpy_one_on_a_measured_recording():
                                                                       math.radians(0.1), 3, G)))
 
 
+def test_the_compiled_shoe_refuses_samples_that_are_not_three_axes():
+    _, acc, gyr = signals()
+    with pytest.raises(ValueError, match=r"shape \(40, 2\).*allowed \(\.\.\., N, 3\)"):
+        D.statistic("shoe", acc[:, :2], gyr[:, :2], 0.01, 0.01, 3)
+
+
 def test_a_window_longer_than_the_recording_is_refused_by_both_paths():
     _, acc, gyr = signals(n=4)
     for statistic in (D.statistic, D.numpy_statistic):
