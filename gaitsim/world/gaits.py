@@ -77,14 +77,18 @@ Running (``"run-rearfoot"``, ``"run-forefoot"``), c from 150 to 180 steps/min:
   plantarflexors switched on earlier (Ahn et al., J Sport Health Sci 3:102-112, 2014), with less tibialis anterior and
   more gastrocnemius activity than rearfoot strikers in terminal swing (Yong, Silder & Delp, J Biomech 47:3593-3597,
   2014); and no published foot-IMU peak rate of forefoot strikers alone was found (the ~1500 deg/s below pools running
-  up to 6.4 m/s). One measured trace disagrees with the swing maximum and the toe-off rate above: the sagittal foot
-  angle of one treadmill runner from the Running Injury Clinic's motion-capture pipeline (repository
-  regifukuchi/BMC-RIC-running-biomechanics, data/L_foot_angle_mat.txt, 200 Hz, ~185 steps/min, speed not given;
-  differentiated for issue 17) lands at 17 deg toes up (a rearfoot strike), turns toes down at up to 520-550 deg/s to an
-  83 deg maximum at 61 % of the cycle, and is fastest in late swing, 620-640 deg/s toes up about 85 ms before contact;
-  its rollover peaks at 340-360 deg/s. One runner of unknown speed, smoothed by the pipeline's filter (which lowers
-  rates more than angles): not fitted here, but it puts the foot's toe-off rotation and swing maximum below this model's
-  and the sagittal peak in late swing;
+  up to 6.4 m/s). Measured running feet disagree with the swing above and with the toe-off rate: the heel and
+  first-metatarsal markers of one treadmill runner of the RBDS dataset at 2.5 / 3.5 / 4.5 m/s (repository
+  regifukuchi/BMC-RIC-running-biomechanics, data/RBDS0041runT252.txt, ...T352, ...T452: 150 Hz, two strides each, 158 /
+  163 / 177 steps/min; read for issue 17, foot pitch from the heel-to-MT1 line, unfiltered) land at 21 / 27 / 27 deg
+  toes up, roll over at up to 480-560 / 640 / 690-780 deg/s, leave the ground (MT1 5 mm up) at 41 / 43 / 46 deg toes
+  down turning at 350-370 / 530-540 / 690-740 deg/s (push-off peaks 460-480 / 650-660 / 810-830 deg/s 13-27 ms before),
+  reach their swing maximum of 87-91 / 105-114 / 120-124 deg at 58-61 % of the stride (~175 ms after toe off), and
+  return toes up at up to 580-620 / 650-680 / 750-780 deg/s 100-190 ms before contact: the sagittal peak is 620-830
+  deg/s, in late swing or at push-off, and the swing maximum grows with speed where this model's shrinks with cadence. A
+  filtered trace of a Running Injury Clinic runner (same repository, data/L_foot_angle_mat.txt, ~185 steps/min) agrees
+  in shape (83 deg maximum at 61 %, late-swing peak 620-640 deg/s). One subject, markers on the shoe (toe flexion
+  unseen): not fitted here yet;
 - a running foot is never still: it pitches (heel rise from 30 deg/s) and rolls (25 deg/s held) through its
   short foot flat, so the stance's calmest rate is ~28 deg/s (median over strides; 15-49 deg/s with the
   stride-to-stride variation of the stance rates). The value is bounded by measurements, not fitted to one: the
@@ -104,7 +108,7 @@ reproduced: the rearfoot strikers' heel-to-toe rollover, whose peak sagittal rat
 for the shoe of medium midsole bending stiffness, the lowest of the five shoes' means; Braeuer et al., Sensors
 21(15):5010, 2021) against 250 / 265 / 424 deg/s here at 150 / 165 / 180 steps/min (median over strides): it
 would take a heel rocker of about 30 ms instead of 73 ms at 165 steps/min, which the stance timing above does not
-give. (The motion-captured runner above rolls over at 340-360 deg/s.)
+give. (The motion-captured runners above roll over at 340-360 and 480-780 deg/s.)
 """
 
 from __future__ import annotations
