@@ -38,6 +38,7 @@ from nav.recording import Recording
 
 ROOT = Path(__file__).resolve().parents[1]
 GAITMAP = "gaitmap RtsKalman (9-state + RTS)"
+WALL, CPU = 0, 1  # columns of interleaved_seconds
 
 
 def load_recording() -> tuple[Recording, str]:
@@ -63,21 +64,21 @@ def synthetic_recording(duration=75.0, fs=800.0, seed=0) -> Recording:
     return Recording(t=t, acc=acc, gyr=gyr)
 
 
-def interleaved_seconds(calls: dict, rounds: int, clock=time.perf_counter) -> dict:
-    """{label: (rounds,) seconds}: every round times each call of ``calls`` ({label: callable}) once, in turn, on
-    ``clock`` (wall by default, ``time.process_time`` for the CPU time of all threads of this process).
+def interleaved_seconds(calls: dict, rounds: int) -> dict:
+    """{label: (rounds, 2) seconds, wall (``time.perf_counter``) and CPU (``time.process_time``: all threads of this
+    process)}: every round times each call of ``calls`` ({label: callable}) once, in turn.
 
     Timing the calls one after another within each round keeps the peers of a ratio side by side: this machine
     (a 2-vCPU VM) runs the same compiled filter at 740 ns per sample for some seconds and at 1,200-1,500 ns for the
     next, in one process and in CPU time alike, so the best of one call's repeats taken before another's can pair
     a fast stretch with a slow one (one such run printed 7.7x against gaitmap where interleaved rounds give more)."""
-    seconds = {label: [] for label in calls}
-    for _ in range(rounds):
+    seconds = {label: np.empty((rounds, 2)) for label in calls}
+    for k in range(rounds):
         for label, call in calls.items():
-            start = clock()
+            wall, cpu = time.perf_counter(), time.process_time()
             call()
-            seconds[label].append(clock() - start)
-    return {label: np.array(times) for label, times in seconds.items()}
+            seconds[label][k] = time.perf_counter() - wall, time.process_time() - cpu
+    return seconds
 
 
 def ratio_text(faster: np.ndarray, slower: np.ndarray) -> str:
@@ -117,7 +118,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5,
                         help="timed rounds, each timing every filter once in turn; the best of each kept (default 5)")
-    parser.add_argument("--runs", type=int, default=64, help="runs in the lock-step batch (default 64)")
+    parser.add_argument("--runs", type=int, default=64, help="runs in the batch call (default 64)")
     args = parser.parse_args(argv)
 
     rec, description = load_recording()
@@ -134,7 +135,7 @@ def main(argv=None) -> int:
         print("gaitmap is not installed (optional extra: pip install '.[bench]'); skipping the comparison")
     else:
         calls[GAITMAP] = gaitmap
-    seconds = interleaved_seconds(calls, args.repeats)
+    seconds = {label: times[:, WALL] for label, times in interleaved_seconds(calls, args.repeats).items()}
     width = max(len(k) for k in calls)
     for label, times in seconds.items():
         print(f"  {label:<{width}}  {n / times.min():>12,.0f} samples/s")
@@ -168,8 +169,9 @@ def main(argv=None) -> int:
 
     batch()  # compile
     singles(1)
-    wall = interleaved_seconds({"batch": batch}, args.repeats)["batch"].min()
-    cpu = interleaved_seconds({"batch": batch, "singles": singles}, args.repeats, time.process_time)
+    times = interleaved_seconds({"batch": batch, "singles": singles}, args.repeats)
+    wall = times["batch"][:, WALL].min()
+    cpu = {label: t[:, CPU] for label, t in times.items()}
     cpu_batch, cpu_single = cpu["batch"].min(), cpu["singles"].min() / args.runs
     threads = numba.get_num_threads()
     total = args.runs * n / wall
