@@ -148,12 +148,6 @@ def on_half_grid(t: np.ndarray, samples: np.ndarray) -> np.ndarray:
     return out
 
 
-def yaw_matrix(angle: float) -> np.ndarray:
-    """(3, 3) rotation by ``angle`` rad about the vertical."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 @dataclass
 class Window:
     """One stride's window (module docstring), on its IMU samples.
@@ -202,7 +196,8 @@ def window(rec, sol, pose: Pose, events: dict, forward: np.ndarray, gravity: flo
     track = strapdown.integrate(t, acc[k0:k1], gyr[k0:k1], sol.quat[k0], gravity=gravity)
     imu_rot = quat.to_matrix(track.quat)
     start_error = vicon_rot[0] @ imu_rot[0].T
-    turn = yaw_matrix(np.arctan2(start_error[1, 0] - start_error[0, 1], start_error[0, 0] + start_error[1, 1]))
+    turn = Rotation.from_euler("z", np.arctan2(start_error[1, 0] - start_error[0, 1],
+                                              start_error[0, 0] + start_error[1, 1])).as_matrix()
     imu_rot_fine = Slerp(t, Rotation.from_matrix(turn @ imu_rot))(fine).as_matrix()
     f_imu = on_half_grid(t, acc[k0:k1])
     f_vicon_world = pose.specific_force(fine, gravity)
@@ -441,7 +436,7 @@ def fwd_up(values: np.ndarray) -> str:
     return f"{1000 * np.median(values[:, 0]):+.0f} / {1000 * np.median(values[:, 1]):+.0f}"
 
 
-def gaitmap_feet():
+def feet_and_twins():
     """(side, recording, its twin read by the ideal sensor) of both gaitmap feet."""
     for side, rec in load_recordings(DATASET, DATA):
         gait = measure_gait(rec, rec.reference.t, rec.reference.pos)
@@ -613,7 +608,7 @@ def hypothesis_table(feet, windows: dict) -> None:
 def main() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the loaders' data-quality warnings
-        feet = list(gaitmap_feet())
+        feet = list(feet_and_twins())
         twin_table(feet)
         windows = real_table(feet)
         slap_levers = {side: slap_lever_arm(side, rec, windows[side]) for side, rec, _ in feet}
