@@ -36,13 +36,24 @@ STOCHASTIC_BLOCK = 4096  # samples summed at a time in a cache-resident buffer
 def _add_interpolated(block, nodes, node_step, node, offset):
     """block[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at the samples of
     the block, the first of which lies ``offset`` samples after node ``node``; returns (node, offset) of the
-    sample after the block."""
-    for k in range(block.shape[0]):
-        frac = offset / node_step
-        for c in range(3):
-            before = nodes[node, c]
-            block[k, c] += before + frac * (nodes[node + 1, c] - before)
-        offset += 1
+    sample after the block. The reference's arithmetic per sample, ``before + (i / node_step) (after - before)``
+    with ``i`` the sample's offset from its node, taken one node interval at a time: the interval's differences
+    once, then a loop over its samples without a division or a branch."""
+    fractions = np.arange(node_step) / node_step  # i / node_step, as the reference divides
+    k = 0
+    while k < block.shape[0]:
+        run = min(block.shape[0] - k, node_step - offset)
+        before_x, before_y, before_z = nodes[node, 0], nodes[node, 1], nodes[node, 2]
+        change_x = nodes[node + 1, 0] - before_x
+        change_y = nodes[node + 1, 1] - before_y
+        change_z = nodes[node + 1, 2] - before_z
+        for i in range(run):
+            fraction = fractions[offset + i]
+            block[k + i, 0] += before_x + fraction * change_x
+            block[k + i, 1] += before_y + fraction * change_y
+            block[k + i, 2] += before_z + fraction * change_z
+        k += run
+        offset += run
         if offset == node_step:
             node, offset = node + 1, 0
     return node, offset
