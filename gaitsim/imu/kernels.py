@@ -33,13 +33,20 @@ STOCHASTIC_BLOCK = 4096  # samples summed at a time in a cache-resident buffer
 
 
 @njit(cache=True)
-def _add_interpolated(block, nodes, node_step, node, offset):
+def _fractions(node_step):
+    """(node_step,) the interpolation fractions ``i / node_step``, divided as the numpy reference divides."""
+    return np.arange(node_step) / node_step
+
+
+@njit(cache=True)
+def _add_interpolated(block, nodes, fractions, node, offset):
     """block[k] += linear interpolation of ``nodes`` (J, 3), spaced ``node_step`` samples, at the samples of
     the block, the first of which lies ``offset`` samples after node ``node``; returns (node, offset) of the
-    sample after the block. The reference's arithmetic per sample, ``before + (i / node_step) (after - before)``
-    with ``i`` the sample's offset from its node, taken one node interval at a time: the interval's differences
-    once, then a loop over its samples without a division or a branch."""
-    fractions = np.arange(node_step) / node_step  # i / node_step, as the reference divides
+    sample after the block. ``fractions`` (node_step,) holds ``i / node_step`` (:func:`_fractions`). The
+    reference's arithmetic per sample, ``before + (i / node_step) (after - before)`` with ``i`` the sample's offset
+    from its node, taken one node interval at a time: the interval's differences once, then a loop over its
+    samples without a division or a branch."""
+    node_step = fractions.shape[0]
     k = 0
     while k < block.shape[0]:
         run = min(block.shape[0] - k, node_step - offset)
@@ -74,6 +81,7 @@ def _add_stochastic_terms(out, signal, summand, offsets, instability_nodes, inst
     finish = resolution > 0.0 or limit < np.inf
     buffer = np.empty((STOCHASTIC_BLOCK, 3))
     instability_at = walk_at = (0, 0)  # (node before the block's first sample, its offset from that node)
+    instability_fractions, walk_fractions = _fractions(instability_step), _fractions(walk_step)
     for start in range(0, out.shape[0], STOCHASTIC_BLOCK):
         stop = min(out.shape[0], start + STOCHASTIC_BLOCK)
         block = buffer[: stop - start]
@@ -85,9 +93,9 @@ def _add_stochastic_terms(out, signal, summand, offsets, instability_nodes, inst
                 for c in range(3):
                     block[k, c] += offset[c]
         if instability_nodes.shape[0]:
-            instability_at = _add_interpolated(block, instability_nodes, instability_step, *instability_at)
+            instability_at = _add_interpolated(block, instability_nodes, instability_fractions, *instability_at)
         if walk_nodes.shape[0]:
-            walk_at = _add_interpolated(block, walk_nodes, walk_step, *walk_at)
+            walk_at = _add_interpolated(block, walk_nodes, walk_fractions, *walk_at)
         if white:
             for k in range(block.shape[0]):
                 for c in range(3):
