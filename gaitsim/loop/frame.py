@@ -25,13 +25,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nav import detectors
 from nav.recording import Recording, RecordingError
 
 from ..measured import axes
 from . import settings
 from .closure import closure_between_stances
-from .strides import stance_intervals
+from .strides import detect_stances
 
 MIRROR = np.diag([-1.0, 1.0, 1.0])
 
@@ -88,8 +87,7 @@ def check_frame(rec: Recording) -> FrameCheck:
     RecordingError
         when the recording has too few stances to tell (fewer than ``settings.MIN_FRAME_STRIDES`` strides).
     """
-    found = detectors.detect("shoe", rec.t, rec.acc, rec.gyr, gravity=rec.gravity)
-    stances = stance_intervals(rec.t, found.stationary)
+    found, stances = detect_stances(rec.t, rec.acc, rec.gyr, rec.gravity)
     gaps = rec.t[stances[1:, 0]] - rec.t[stances[:-1, 1] - 1] if len(stances) > 1 else np.empty(0)
     pairs = np.stack([stances[:-1], stances[1:]], axis=1)[gaps < settings.MAX_STRIDE_S] if len(gaps) else gaps
     if len(pairs) < settings.MIN_FRAME_STRIDES:

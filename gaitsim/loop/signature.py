@@ -3,7 +3,7 @@
 A *signature* (:func:`signature`) summarises one recording with the same recipe whether it is measured or
 simulated, so two signatures can be compared number by number:
 
-1. Strides from the IMU alone (:mod:`gaitsim.loop.strides`: SHOE with the shared filter's defaults, a stride
+1. Strides from the IMU alone (:mod:`gaitsim.loop.strides`: the shared filter's default detector, a stride
    from one gyro-quiet stance onset to the next, irregular ones dropped).
 2. Per stride (n strides, each statistic's uncertainty is its stride-to-stride standard deviation / sqrt(n)):
 
@@ -65,7 +65,7 @@ from nav.series import resample
 from . import settings
 from .closure import closure_between_stances, following, middle_thirds
 from .push_off import push_off_lag
-from .strides import dominant_axis, phase_resample, regular_strides, stance_intervals
+from .strides import detect_stances, dominant_axis, phase_resample, regular_strides
 
 CHANNELS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
 CLOSURE = ("closure_forward", "closure_left", "closure_up", "closure_roll", "closure_pitch")
@@ -103,8 +103,10 @@ class Signature:
     stances : (n, 2) int, sample indices of each used stride's detected stance (start, end).
     rate_hz : median sample rate.
     spectrum : (frequencies Hz, mean power of |a| per stride, normalised to unit total) for figures.
-    stationary : (N,) bool, the SHOE detection the strides were cut from (the twin fit re-uses it).
+    stationary : (N,) bool, the zero-velocity detection the strides were cut from (nav's default, the anchored
+        SHOE: :func:`gaitsim.loop.strides.detect_stances`).
     gravity : m/s^2, the gravity that detection assumed (the recording's).
+    stance_runs : (m, 2) int, every detected stance [start, end), the rests included (the twin fit re-uses them).
     """
 
     scalars: dict
@@ -115,6 +117,7 @@ class Signature:
     spectrum: tuple
     stationary: np.ndarray
     gravity: float
+    stance_runs: np.ndarray
 
 
 def mean_se(samples) -> Scalar:
@@ -182,7 +185,7 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     t : (N,) s.  acc : (N, 3) m/s^2 specific force.  gyr : (N, 3) rad/s.
     pos_t, pos : optional position track (M,) s and (M, 3) m on the same clock (a reference or the truth);
         needed for ``stance_velocity``.
-    gravity : m/s^2, for the SHOE detector.
+    gravity : m/s^2, for the zero-velocity detector.
 
     Raises
     ------
@@ -192,8 +195,7 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     acc = np.asarray(acc, float)
     gyr = np.asarray(gyr, float)
     rate = detectors.sample_rate(t)
-    result = detectors.detect("shoe", t, acc, gyr, gravity=gravity)
-    stances_all = stance_intervals(t, result.stationary)
+    result, stances_all = detect_stances(t, acc, gyr, gravity)
     strides, stances = regular_strides(t, gyr, stances_all)
     if len(strides) < 3:
         raise ValueError(f"signature: only {len(strides)} regular strides found (need 3); stance runs: "
@@ -223,7 +225,7 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
         scalars[name] = Scalar(spread.value, float(np.hypot(spread.se, common[axis])), spread.samples)
     scalars["acc_gyro_lag"] = Scalar(*push_off_lag(t, acc, gyr, stances), np.empty(0))
     return Signature(scalars, _profiles(t, acc, gyr, strides), strides, stances, rate,
-                     _spectrum(acc_norm, strides, rate), result.stationary, float(gravity))
+                     _spectrum(acc_norm, strides, rate), result.stationary, float(gravity), stances_all)
 
 
 def _stance_statistics(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, log_stat: np.ndarray,

@@ -1,7 +1,10 @@
 """Strides of a foot-IMU recording from its IMU alone, and signals resampled on their gait phase.
 
-Stance is detected with SHOE (:mod:`nav.detectors`); runs of stance closer than ``settings.MERGE_GAP_S`` are
-merged. A stride runs from one stance onset to the next, the onset being where the angular rate last fell below
+Stance is detected as nav detects it by default, with the anchored SHOE (:mod:`nav.calm_anchor`: OpenShoe's
+fixed-threshold SHOE, plus each stride's calmest stretch where that finds nothing, as in running); runs of stance
+closer than ``settings.MERGE_GAP_S`` are merged, and runs of the fixed test shorter than ``settings.MIN_STANCE_S``
+are dropped (a swing crossing the threshold for a few samples), while a run the anchor marked is a stride's
+stance whatever its length (a running foot's calm stretch lasts 50-70 ms). A stride runs from one stance onset to the next, the onset being where the angular rate last fell below
 ``settings.QUIET_RATE_DPS`` before the stance centre (a gyro-only event, so accelerometer-side effects that move
 the SHOE onset do not shift the phase grid); strides whose period is not within ``settings.STRIDE_PERIOD_BAND``
 times the median (rest at the ends, missed stances) are dropped.
@@ -12,16 +15,30 @@ from __future__ import annotations
 import numpy as np
 
 from nav.alignment import merged_runs
+from nav.calm_anchor import detect_anchored
+from nav.detectors import DetectorResult, spread_marks
 from nav.series import resample
 
 from . import settings
 
 
-def stance_intervals(t: np.ndarray, stationary: np.ndarray) -> np.ndarray:
-    """(m, 2) sample indices [start, end) of detected stances after merging gaps < ``settings.MERGE_GAP_S`` and
-    dropping runs shorter than ``settings.MIN_STANCE_S``; ``t`` in s."""
+def detect_stances(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: float) -> tuple[DetectorResult,
+                                                                                             np.ndarray]:
+    """nav's default zero-velocity detection of a recording (t (N,) s, acc (N, 3) m/s^2, gyr (N, 3) rad/s, gravity
+    m/s^2; the anchored SHOE at nav's settings) and its stances (:func:`stance_intervals`)."""
+    result = detect_anchored(t, acc, gyr, gravity=gravity)
+    anchored = spread_marks(result.threshold > result.params.threshold, result.params.window)
+    return result, stance_intervals(t, result.stationary, anchored)
+
+
+def stance_intervals(t: np.ndarray, stationary: np.ndarray, anchored: np.ndarray | None = None) -> np.ndarray:
+    """(m, 2) sample indices [start, end) of detected stances after merging gaps < ``settings.MERGE_GAP_S``,
+    dropping runs shorter than ``settings.MIN_STANCE_S`` unless they hold a sample of ``anchored`` (N,) bool, the
+    anchored SHOE's own marks; ``t`` in s."""
     out = merged_runs(t, stationary, settings.MERGE_GAP_S)[0]
     keep = t[out[:, 1] - 1] - t[out[:, 0]] >= settings.MIN_STANCE_S
+    if anchored is not None:
+        keep |= np.array([anchored[a:b].any() for a, b in out], bool)
     return out[keep]
 
 
