@@ -12,7 +12,10 @@ integral gives the pitch. The simulator's pitch of a steady stride comes from
 2. **Least squares** (:func:`fit_pitch_profile`) from the better of that estimate and the given gait (the
    simulator's defaults at the recording's cadence), on the rate profile plus the stride's largest and
    smallest pitch (one degree weighs ``settings.ANGLE_WEIGHT`` deg/s). Combinations the scenario validation refuses
-   cost a large penalty. The fitted values are scenario keys in their units (deg, deg/s, deg/s^2, s): the fit
+   cost a large penalty. A running twin (``settings.RUN_PITCH_FIT_BOUNDS``) fits the offset of the model's phase
+   origin too: a running foot turns at 15-50 deg/s through its stance, so the recording's |w| onset does not
+   fall where the model's pitch rate rises (on simulated runs the model at the true gait misfits by 165-210
+   deg/s rms at the origin as cut and by 70-90 at its best offset); each start is judged at its best offset. The fitted values are scenario keys in their units (deg, deg/s, deg/s^2, s): the fit
    returns what a scenario file would say, and :func:`gaitsim.scenario.fill` converts it.
 """
 
@@ -55,6 +58,9 @@ class StrideProfile:
     @property
     def phase(self) -> np.ndarray:
         return np.linspace(0.0, 1.0, len(self.rate), endpoint=False)
+
+
+ORIGIN_SHIFT = "origin_shift"  # a fitted offset of the model's phase origin (stride share), not a scenario key
 
 
 def _angle(rate: np.ndarray, period_s: float) -> np.ndarray:
@@ -126,46 +132,61 @@ def initial_guess(measured: StrideProfile) -> dict:
 
 def _apply(values: dict, gait: GaitParams, impact: ImpactParams) -> tuple[GaitParams, ImpactParams]:
     """``gait`` and ``impact`` with the fitted scenario keys ``values`` (their units) and the swing fraction."""
-    values = dict(values)
+    values = {key: value for key, value in values.items() if key != ORIGIN_SHIFT}
     values["swing_frac"] = 1.0 - values["heel_rocker_frac"] - values["foot_flat_frac"] - values["push_off_frac"]
     impact_keys = {name for name, section, _, _ in settings.PITCH_FIT_BOUNDS if section == "impact"}
     return (fill(GaitParams, {k: v for k, v in values.items() if k not in impact_keys}, "<pitch fit> [gait]", gait),
             fill(ImpactParams, {k: v for k, v in values.items() if k in impact_keys}, "<pitch fit> [impact]", impact))
 
 
-def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactParams) -> tuple[dict, dict]:
-    """Fit the events, pitch angles and rates and the slap (module docstring) for a gait of ``gait``'s cadence.
+def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactParams,
+                      micro: MicroMotionParams = MicroMotionParams(),
+                      bounds: tuple = settings.PITCH_FIT_BOUNDS) -> tuple[dict, dict]:
+    """Fit the events, pitch angles and rates and the slap (module docstring) for a gait of ``gait``'s cadence and
+    the stance micro-motion ``micro`` (its pulses must fit the foot flat), the keys and their ranges ``bounds``
+    ((scenario key, section, low, high) in the key's unit: the walking ranges, or ``settings.RUN_PITCH_FIT_BOUNDS``
+    for a running twin).
 
     Returns
     -------
     changes : {"gait": {...}, "impact": {...}} to merge into a scenario document (swing_frac included).
     quality : rms rate misfit (deg/s) of the feature estimate and of the fit, and the fitted pitch extremes.
     """
-    names = [name for name, _, _, _ in settings.PITCH_FIT_BOUNDS]
-    low = np.array([lo for _, _, lo, _ in settings.PITCH_FIT_BOUNDS])
-    high = np.array([hi for _, _, _, hi in settings.PITCH_FIT_BOUNDS])
+    names = [name for name, _, _, _ in bounds]
+    low = np.array([lo for _, _, lo, _ in bounds])
+    high = np.array([hi for _, _, _, hi in bounds])
     inside = 1e-6 * (high - low)
-    guess = initial_guess(measured)
-    given = {"gait": section_table(gait), "impact": section_table(impact)}
+    guess = {**initial_guess(measured), ORIGIN_SHIFT: 0.0}
+    given = {"gait": section_table(gait), "impact": section_table(impact), "origin": {ORIGIN_SHIFT: 0.0}}
     starts = {"features": np.array([guess[n] for n in names], float),
-              "given": np.array([given[sec][n] for n, sec, _, _ in settings.PITCH_FIT_BOUNDS], float)}
+              "given": np.array([given[sec][n] for n, sec, _, _ in bounds], float)}
     extremes = np.array([measured.angle.max(), measured.angle.min()])
+
+    def rate_misfit(x, model: StrideProfile) -> np.ndarray:
+        if ORIGIN_SHIFT not in names:
+            return model.rate - measured.rate
+        phase = measured.phase
+        return np.interp(phase + x[names.index(ORIGIN_SHIFT)], phase, model.rate, period=1.0) - measured.rate
 
     def cost(x):
         g, i = _apply(dict(zip(names, x)), gait, impact)
         if g.swing_frac < settings.MIN_SWING_FRAC:
             return np.full(settings.PROFILE_POINTS + 2, 1e3 * (1.0 + settings.MIN_SWING_FRAC - g.swing_frac))
         try:
-            validate_gait(g, i, MicroMotionParams(), "<pitch fit>")
+            validate_gait(g, i, micro, "<pitch fit>")
         except ScenarioError:
             return np.full(settings.PROFILE_POINTS + 2, 1e3)
         model = model_profile(g, i)
-        return np.concatenate([model.rate - measured.rate,
+        return np.concatenate([rate_misfit(x, model),
                                settings.ANGLE_WEIGHT * (np.array([model.angle.max(), model.angle.min()]) - extremes)])
 
     costs = {}
     for label, x in starts.items():
         starts[label] = np.clip(x, low + inside, high - inside)
+        if ORIGIN_SHIFT in names:  # each start judged at its best origin offset (grid over its range)
+            k = names.index(ORIGIN_SHIFT)
+            offsets = np.linspace(low[k] + inside[k], high[k] - inside[k], settings.ORIGIN_GRID_POINTS)
+            starts[label][k] = min(offsets, key=lambda o: float(np.sum(cost(np.r_[x[:k], o, x[k + 1:]]) ** 2)))
         costs[label] = float(np.sum(cost(starts[label]) ** 2))
     origin = min(costs, key=costs.get)
     found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low,
@@ -173,13 +194,15 @@ def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactP
                           max_nfev=settings.MAX_EVALUATIONS)
     best = found.x if np.sum(found.fun ** 2) <= costs[origin] else starts[origin]
     g, i = _apply(dict(zip(names, best)), gait, impact)
-    changes = {"gait": {n: float(x) for (n, sec, _, _), x in zip(settings.PITCH_FIT_BOUNDS, best) if sec == "gait"},
-               "impact": {n: float(x) for (n, sec, _, _), x in zip(settings.PITCH_FIT_BOUNDS, best) if sec == "impact"}}
+    changes = {"gait": {n: float(x) for (n, sec, _, _), x in zip(bounds, best) if sec == "gait"},
+               "impact": {n: float(x) for (n, sec, _, _), x in zip(bounds, best) if sec == "impact"}}
     changes["gait"]["swing_frac"] = float(g.swing_frac)
     model = model_profile(g, i)
     quality = {"start": origin,
                "rms_misfit_at_starts": {k: float(np.sqrt(v / (settings.PROFILE_POINTS + 2))) for k, v in costs.items()},
-               "rms_rate_misfit_fit_dps": float(np.sqrt(np.mean((model.rate - measured.rate) ** 2))),
+               "rms_rate_misfit_fit_dps": float(np.sqrt(np.mean(rate_misfit(best, model) ** 2))),
+               "origin_shift_s": float(best[names.index(ORIGIN_SHIFT)] * measured.period_s if ORIGIN_SHIFT in names
+                                       else 0.0),
                "pitch_extremes_measured_deg": extremes.tolist(),
                "pitch_extremes_twin_deg": [float(model.angle.max()), float(model.angle.min())]}
     return changes, quality

@@ -107,8 +107,11 @@ def _figures(result: att.LoopResult, folder: Path) -> list[str]:
 
 def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
     """The human report of one loop result."""
+    kind = result.twin_before.notes.get("gait_kind", {})
+    gait = (f"a {kind['kind'].replace('-', ', ')} strike" if kind.get("kind", "walk") != "walk" else "a walk") + (
+        f" ({kind['speed_mps']:.2f} m/s; a run from {kind['walk_run_speed_mps']:g} m/s)" if kind else "")
     lines = [f"# Sim-to-real loop: {label}", "",
-             f"Twin: {result.twin_before.notes.get('path', '')}; track from the "
+             f"Twin: {gait}; {result.twin_before.notes.get('path', '')}; track from the "
              f"{result.twin_before.notes.get('track', '')}. Residual = recording - twin; z = |residual| / "
              f"uncertainty; at the noise level when z <= {settings.NOISE_LEVEL}. An effect is named when it "
              f"explains at least {settings.EXPLAINED_FRACTION:.0%} of the residual acted on and lowers the total misfit.", "",

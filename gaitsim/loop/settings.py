@@ -53,6 +53,9 @@ CORNER_RADII_M = (1.0, 0.75, 0.5)  # m, corner radii tried in turn (then half a 
 RADIUS_MARGIN_M = 0.001  # m, added to the half-stride corner radius (the scenario requires at least one step)
 STRAIGHT_MIN_SPAN_M = 0.5  # m, a straight twin walks toward the track's end only when that end is this far away
 DEFAULT_STRIDE_LENGTH_M = 1.4  # m, the twin's stride length when the track gives no stance-to-stance step
+WALK_RUN_SPEED_MPS = 2.0  # m/s, a recording at least this fast (stride length x stride rate) gets a running twin:
+# the preferred walk-run transition speed of adults, 2.0-2.1 m/s (Hreljac, Med Sci Sports Exerc 25:1158-1162, 1993;
+# a Froude number v^2 / (g L) of ~0.5 at a 0.9 m leg length)
 MAX_CYCLE_SD_FRAC = 0.1  # 1, largest stride-to-stride spread of the cycle time the twin is given
 MIN_REST_S = 0.5  # s, least standing time at either end of the twin (the filter aligns on it)
 QUIET_WINDOW_S = 0.5  # s, length of the quietest window (noise, tilt) and least length of a rest for the gyro bias
@@ -84,6 +87,15 @@ PITCH_FIT_BOUNDS = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", 
                     ("pitch_accel_toe_off_dps2", "gait", -4e4, 1e4),
                     ("pitch_accel_heel_strike_dps2", "gait", -2e4, 2e4), ("slap_rate_dps", "impact", 0.0, 900.0),
                     ("slap_duration_s", "impact", 0.005, 0.15))
+# a running twin's pitch fit (gaitsim.world.gaits' running kinds: a forefoot strike lands toes down, the foot
+# leaves the ground turning at ~1000 deg/s); the other bounds as for walking. A running foot turns at 15-50 deg/s
+# through its stance (|w| near QUIET_RATE_DPS), so the recording's |w| onset, the phase origin of its profile, does
+# not fall where the model's pitch rate rises: the origin's offset (a share of the stride) is fitted as well
+RUN_PITCH_FIT_BOUNDS = tuple((name, section, *{"pitch_heel_strike_deg": (-45.0, 30.0),
+                                                "pitch_rate_heel_strike_dps": (-700.0, 700.0),
+                                                "pitch_rate_toe_off_dps": (-300.0, 1800.0)}.get(name, (low, high)))
+                             for name, section, low, high in PITCH_FIT_BOUNDS) + (("origin_shift", "origin", -0.1, 0.1),)
+ORIGIN_GRID_POINTS = 41  # offsets tried for each start of a fit with a fitted origin (every 0.5 % of the stride)
 
 # -- sensor position on the foot (gaitsim.loop.mount_fit) ----------------------------------------------------
 PROBE_M = 0.1  # m, how far each probe moves the IMU site

@@ -8,6 +8,12 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
   accelerations at heel strike and toe off, and the forefoot slap, fitted so that the simulator's pitch rate
   over a stride matches the recording's rate about its dominant axis (gaitmap: 35-40 deg/s rms left, against
   ~170 deg/s for the default gait).
+- **Walk or run** (:func:`_gait_shapes`): a recording at least ``settings.WALK_RUN_SPEED_MPS`` fast (stride length
+  x stride rate) is a run, and its twin starts from the running defaults of :mod:`gaitsim.world.gaits` (a foot
+  never still in stance, a swing that stops at a pitch maximum, harder landings) with the strike, rearfoot or
+  forefoot, whose fitted pitch rate matches better (simulated runs: 42-48 deg/s rms; a walking twin of a run
+  peaks at half its rate). A fitted shape whose simulated strides the detector cannot cut is passed over for
+  the next candidate, the kinds' unfitted defaults last; the note ``gait_kind`` says which was taken.
 - **Clearance.** With a continuous position track, ``swing_height_m`` is scaled by measured / twin median
   height of the track in swing above the stance level.
 - **Stride length and turns.** From the position track at the stance centres (the reference when it has more
@@ -60,11 +66,11 @@ from ..scenario import Scenario, fill, scenario_document, scenario_from_dict, wi
 from ..simulate import sense, simulate_world
 from ..world import path as paths
 from ..world.foot import FootModel
-from ..world.gait import GaitParams, ImpactParams
+from ..world.gait import GaitParams, ImpactParams, MicroMotionParams
+from ..world.gaits import CADENCE_SPAN, run_tables
 from . import gait_fit, mount_fit, settings
 from .push_off import push_off_height
 from .signature import Signature, rest_core, signature
-from .strides import stance_intervals
 
 
 @dataclass
@@ -221,8 +227,7 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
     steps = np.hypot(*np.diff(xy, axis=0).T)
     stride_length = float(np.median(steps)) if len(steps) else settings.DEFAULT_STRIDE_LENGTH_M
     stationary = sig.stationary
-    stances = stance_intervals(rec.t, stationary)
-    all_centres = rec.t[(stances[:, 0] + stances[:, 1]) // 2]
+    all_centres = rec.t[(sig.stance_runs[:, 0] + sig.stance_runs[:, 1]) // 2]
     all_xy = resample(all_centres, track_t[ok], track[ok, :2])
     path, path_note = path_table(all_xy, stride_length)
     stand_start, stand_end = _rest_runs(rec.t, stationary)
@@ -237,7 +242,6 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
         "gait": {"cadence_steps_per_min": 120.0 / measured["period_s"], "stride_length_m": stride_length,
                  "cycle_sd_frac": min(settings.MAX_CYCLE_SD_FRAC, measured["period_sd_frac"]),
                  "stand_start_s": stand_start, "stand_end_s": stand_end},
-        "micromotion": {"foot": "right" if sig.scalars["stance_rate_x"].value < 0 else "left"},
         "sampling": {"rate_hz": rate, "gravity_mps2": gravity},
         "sensor": {"preset": "ideal",
                    "accel_noise_density": [(acc_sd / math.sqrt(rate)).tolist(), "m/s^2/sqrt(Hz)"],
@@ -245,14 +249,21 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
                    "gyro_bias": [_rest_gyro_mean(rec, stationary, (q0, q1)).tolist(), "rad/s"],
                    **_mount_angles(roll, pitch, 0.0)["sensor"]},
     }
-    shape, shape_quality = gait_fit.fit_pitch_profile(gait_fit.stride_profile(rec.t, rec.acc, rec.gyr, sig),
-                                                      fill(GaitParams, doc["gait"], "<twin> [gait]"), ImpactParams())
-    doc["gait"].update(shape["gait"])
-    doc["impact"] = shape["impact"]
+    foot = "right" if sig.scalars["stance_rate_x"].value < 0 else "left"
     notes.update(static_std={"acc_mps2": acc_sd.tolist(), "gyr_rad_s": gyr_sd.tolist()},
-                 measured_statistics=measured, gait_shape_fit=shape_quality, track=source, path=path_note,
+                 measured_statistics=measured, track=source, path=path_note,
                  stride_length_m=stride_length, quiet_window_s=[float(rec.t[q0]), float(rec.t[q1 - 1])])
-    twin, yaw_quality = refit_yaw(Twin(scenario_from_dict(doc, "<twin>"), notes), sig, simulate)
+    refused = []
+    for tables, kind_note in _gait_shapes(gait_fit.stride_profile(rec.t, rec.acc, rec.gyr, sig), doc["gait"]):
+        doc.update(gait=tables["gait"], impact=tables["impact"], micromotion={**tables["micromotion"], "foot": foot})
+        shaped = Twin(scenario_from_dict(doc, "<twin>"), {**notes, "gait_shape_fit": kind_note.pop("shape_fit"),
+                                                          "gait_kind": {**kind_note, "refused": refused}})
+        try:
+            _signature_of(simulate(shaped))
+            break
+        except ValueError as exc:  # a gait shape whose strides the detector cannot cut: the next candidate
+            refused.append(f"{kind_note['kind']} ({kind_note['shape']}): {exc}")
+    twin, yaw_quality = refit_yaw(shaped, sig, simulate)
     gait = twin.scenario.walk.gait
     phases = mount_fit.contact_phases(gait.heel_rocker_frac, gait.foot_flat_frac, gait.push_off_frac)
     lag = sig.scalars["acc_gyro_lag"].value
@@ -267,6 +278,51 @@ def fit_twin(rec: Recording, sig: Signature, solution, simulate: TwinSimulator) 
         twin = _correct(twin, measured, simulate)
     twin.notes["twin_statistics"] = _twin_statistics(twin, measured, simulate)
     return twin
+
+
+def _gait_shapes(profile: gait_fit.StrideProfile, timing: dict):
+    """The twin's candidate [gait], [impact] and [micromotion] tables, best first, each with what decided it: walking
+    or running, with the gait shape fitted to the recording's stride ``profile``
+    (:func:`gaitsim.loop.gait_fit.fit_pitch_profile`) on top of ``timing`` (the [gait] keys of cadence, stride
+    length, their spread and the rests). :func:`fit_twin` takes the first whose simulation the detector cuts into
+    strides.
+
+    A recording whose speed (stride length x stride rate) reaches ``settings.WALK_RUN_SPEED_MPS`` is a run: its twin
+    starts from the running defaults of :mod:`gaitsim.world.gaits` at the recording's cadence (held inside the span
+    they are documented for; a running foot is never still in stance, its swing stops at a pitch maximum), and the
+    rearfoot and the forefoot strike are ranked by how well their fitted pitch rate matches the recording's.
+    Slower recordings keep the walking defaults of :class:`gaitsim.world.gait.GaitParams`. After the fitted shapes
+    come the kinds' defaults unfitted (a fit can reach a shape whose stance the detector misses)."""
+    cadence = timing["cadence_steps_per_min"]
+    speed = timing["stride_length_m"] * cadence / 120.0
+    note = {"speed_mps": speed, "walk_run_speed_mps": settings.WALK_RUN_SPEED_MPS}
+    if speed < settings.WALK_RUN_SPEED_MPS:
+        starts, bounds = {"walk": {"gait": {}, "impact": {}, "micromotion": {}}}, settings.PITCH_FIT_BOUNDS
+    else:
+        held = float(np.clip(cadence, *CADENCE_SPAN["run-rearfoot"]))
+        starts = {kind: run_tables(held, forefoot=kind == "run-forefoot") for kind in ("run-rearfoot", "run-forefoot")}
+        bounds = settings.RUN_PITCH_FIT_BOUNDS
+    fitted = []
+    for kind, tables in starts.items():
+        gait = {**tables["gait"], **timing}
+        shape, quality = gait_fit.fit_pitch_profile(profile, fill(GaitParams, gait, "<twin> [gait]"),
+                                                    fill(ImpactParams, tables["impact"], "<twin> [impact]"),
+                                                    fill(MicroMotionParams, tables["micromotion"], "<twin> [micromotion]"),
+                                                    bounds)
+        fitted.append((quality["rms_rate_misfit_fit_dps"], kind, quality,
+                       {"gait": {**gait, **shape["gait"]}, "impact": {**tables["impact"], **shape["impact"]},
+                        "micromotion": tables["micromotion"]}))
+    misfits = {kind: misfit for misfit, kind, _, _ in fitted}
+    for _, kind, quality, tables in sorted(fitted, key=lambda f: f[0]):
+        yield tables, {**note, "kind": kind, "shape": "fitted", "rms_rate_misfit_dps": misfits, "shape_fit": quality}
+    for kind, tables in starts.items():
+        yield ({**tables, "gait": {**tables["gait"], **timing}},
+               {**note, "kind": kind, "shape": "defaults", "rms_rate_misfit_dps": misfits, "shape_fit": None})
+
+
+def _signature_of(rec: Recording) -> Signature:
+    """The signature of a twin's recording (raises ValueError when it has fewer than three regular strides)."""
+    return signature(rec.t, rec.acc, rec.gyr, gravity=rec.gravity)
 
 
 def refit_yaw(twin: Twin, measured: Signature, simulate: TwinSimulator) -> tuple[Twin, dict]:
