@@ -3,11 +3,14 @@
 Stance is detected as nav detects it by default, with the anchored SHOE (:mod:`nav.calm_anchor`: OpenShoe's
 fixed-threshold SHOE, plus each stride's calmest stretch where that finds nothing, as in running); runs of stance
 closer than ``settings.MERGE_GAP_S`` are merged, and runs of the fixed test shorter than ``settings.MIN_STANCE_S``
-are dropped (a swing crossing the threshold for a few samples), while a run the anchor marked is a stride's
-stance whatever its length (a running foot's calm stretch lasts 50-70 ms). A stride runs from one stance onset to the next, the onset being where the angular rate last fell below
-``settings.QUIET_RATE_DPS`` before the stance centre (a gyro-only event, so accelerometer-side effects that move
-the SHOE onset do not shift the phase grid); strides whose period is not within ``settings.STRIDE_PERIOD_BAND``
-times the median (rest at the ends, missed stances) are dropped.
+are dropped (a swing crossing the threshold for a few samples). Where the anchor acted (a recording whose feet
+are not still in stance: a run), a run it marked is a stride's stance whatever its length (a running foot's calm
+stretch lasts 50-70 ms), and so is a short run of the fixed test with no other stance within the anchor's span (the
+fixed test passed that stance for a few samples, which held the anchor off). A stride runs from one stance onset
+to the next, the onset being where |w| last rose above ``settings.QUIET_RATE_DPS`` before the stance centre (a
+gyro-only event, so accelerometer-side effects that move the SHOE onset do not shift the phase grid); strides whose
+period is not within ``settings.STRIDE_PERIOD_BAND`` times the median (rest at the ends, missed stances) are
+dropped.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from nav.alignment import merged_runs
-from nav.calm_anchor import detect_anchored
+from nav.calm_anchor import CalmAnchor, detect_anchored
 from nav.detectors import DetectorResult, spread_marks
 from nav.series import resample
 
@@ -26,19 +29,25 @@ def detect_stances(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, gravity: flo
                                                                                              np.ndarray]:
     """nav's default zero-velocity detection of a recording (t (N,) s, acc (N, 3) m/s^2, gyr (N, 3) rad/s, gravity
     m/s^2; the anchored SHOE at nav's settings) and its stances (:func:`stance_intervals`)."""
-    result = detect_anchored(t, acc, gyr, gravity=gravity)
+    anchor = CalmAnchor()
+    result = detect_anchored(t, acc, gyr, gravity=gravity, anchor=anchor)
     anchored = spread_marks(result.threshold > result.params.threshold, result.params.window)
-    return result, stance_intervals(t, result.stationary, anchored)
+    return result, stance_intervals(t, result.stationary, anchored, anchor.half_span_s)
 
 
-def stance_intervals(t: np.ndarray, stationary: np.ndarray, anchored: np.ndarray | None = None) -> np.ndarray:
-    """(m, 2) sample indices [start, end) of detected stances after merging gaps < ``settings.MERGE_GAP_S``,
-    dropping runs shorter than ``settings.MIN_STANCE_S`` unless they hold a sample of ``anchored`` (N,) bool, the
-    anchored SHOE's own marks; ``t`` in s."""
+def stance_intervals(t: np.ndarray, stationary: np.ndarray, anchored: np.ndarray | None = None,
+                     span_s: float = 0.0) -> np.ndarray:
+    """(m, 2) sample indices [start, end) of detected stances after merging gaps < ``settings.MERGE_GAP_S`` and
+    dropping runs shorter than ``settings.MIN_STANCE_S``; ``t`` in s. Where ``anchored`` (N,) bool, the anchored
+    SHOE's own marks, holds any sample, a short run is kept when it holds one of them or when no kept run lies
+    within ``span_s`` (s, the anchor's half span) of it (module docstring)."""
     out = merged_runs(t, stationary, settings.MERGE_GAP_S)[0]
-    keep = t[out[:, 1] - 1] - t[out[:, 0]] >= settings.MIN_STANCE_S
-    if anchored is not None:
+    start, end = t[out[:, 0]], t[out[:, 1] - 1]
+    keep = end - start >= settings.MIN_STANCE_S
+    if anchored is not None and anchored.any():
         keep |= np.array([anchored[a:b].any() for a, b in out], bool)
+        gaps = np.maximum(start[:, None] - end[keep][None, :], start[keep][None, :] - end[:, None])  # (m, kept)
+        keep |= ~np.any(gaps <= span_s, axis=1)
     return out[keep]
 
 
