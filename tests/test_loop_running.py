@@ -98,7 +98,7 @@ def test_a_gyro_delay_on_a_run_is_read_by_the_push_off_lag_and_named_a_skew(rear
     # The push-off lag (the gyro's turn against the accelerometer's where the foot pivots on its toe) reads the delay
     # itself. The skew is fitted on every residual it moves: on this run the loop acts first on the forward stride
     # closure, which the untouched run gave to an accelerometer x offset (the sensor's own, ~0.24 m/s^2), and the
-    # skew takes part of it (-5.8 ms; -4.1 ms on another seed and cadence): named, not yet within the blind table's 25 %.
+    # skew takes part of it (-5.7 ms; -3.5 ms on another seed and cadence): named, not within the blind table's 25 %.
     tau = 0.004  # s: the gyro's samples read at t - tau (the test's own interpolation)
     gyr = np.stack([np.interp(rearfoot.t - tau, rearfoot.t, g) for g in rearfoot.gyr.T], axis=1)
     delayed = dataclasses.replace(rearfoot, gyr=gyr)

@@ -14,9 +14,10 @@ integral gives the pitch. The simulator's pitch of a steady stride comes from
    smallest pitch (one degree weighs ``settings.ANGLE_WEIGHT`` deg/s). Combinations the scenario validation refuses
    cost a large penalty. A running twin (``settings.RUN_PITCH_FIT_BOUNDS``) fits the offset of the model's phase
    origin too: a running foot turns at 15-50 deg/s through its stance, so the recording's |w| onset does not
-   fall where the model's pitch rate rises (on simulated runs the model at the true gait misfits by 165-210
-   deg/s rms at the origin as cut and by 70-90 at its best offset); each start is judged at its best offset. The fitted values are scenario keys in their units (deg, deg/s, deg/s^2, s): the fit
-   returns what a scenario file would say, and :func:`gaitsim.scenario.fill` converts it.
+   fall where the model's pitch rate rises (on simulated runs the model at the true gait misfits by 135-200
+   deg/s rms at the origin as cut and by 45-95 at its best offset); each start is judged at its best offset.
+   The fitted values are scenario keys in their units (deg, deg/s, deg/s^2, s): the fit returns what a scenario
+   file would say, and :func:`gaitsim.scenario.fill` converts it.
 """
 
 from __future__ import annotations

@@ -94,7 +94,8 @@ PITCH_FIT_BOUNDS = (("heel_rocker_frac", "gait", 0.04, 0.3), ("foot_flat_frac", 
 RUN_PITCH_FIT_BOUNDS = tuple((name, section, *{"pitch_heel_strike_deg": (-45.0, 30.0),
                                                 "pitch_rate_heel_strike_dps": (-700.0, 700.0),
                                                 "pitch_rate_toe_off_dps": (-300.0, 1800.0)}.get(name, (low, high)))
-                             for name, section, low, high in PITCH_FIT_BOUNDS) + (("origin_shift", "origin", -0.1, 0.1),)
+                             for name, section, low, high in PITCH_FIT_BOUNDS)
+RUN_PITCH_FIT_BOUNDS += (("origin_shift", "origin", -0.1, 0.1),)  # the origin's offset, a share of the stride
 ORIGIN_GRID_POINTS = 41  # offsets tried for each start of a fit with a fitted origin (every 0.5 % of the stride)
 
 # -- sensor position on the foot (gaitsim.loop.mount_fit) ----------------------------------------------------

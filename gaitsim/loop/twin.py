@@ -11,7 +11,7 @@ Fit (:func:`fit_twin`; every number it used goes into ``Twin.notes``):
 - **Walk or run** (:func:`_gait_shapes`): a recording at least ``settings.WALK_RUN_SPEED_MPS`` fast (stride length
   x stride rate) is a run, and its twin starts from the running defaults of :mod:`gaitsim.world.gaits` (a foot
   never still in stance, a swing that stops at a pitch maximum, harder landings) with the strike, rearfoot or
-  forefoot, whose fitted pitch rate matches better (simulated runs: 42-48 deg/s rms; a walking twin of a run
+  forefoot, whose fitted pitch rate matches better (simulated runs: 42-50 deg/s rms; a walking twin of a run
   peaks at half its rate). A fitted shape whose simulated strides the detector cannot cut is passed over for
   the next candidate, the kinds' unfitted defaults last; the note ``gait_kind`` says which was taken.
 - **Clearance.** With a continuous position track, ``swing_height_m`` is scaled by measured / twin median
@@ -305,10 +305,9 @@ def _gait_shapes(profile: gait_fit.StrideProfile, timing: dict):
     fitted = []
     for kind, tables in starts.items():
         gait = {**tables["gait"], **timing}
-        shape, quality = gait_fit.fit_pitch_profile(profile, fill(GaitParams, gait, "<twin> [gait]"),
-                                                    fill(ImpactParams, tables["impact"], "<twin> [impact]"),
-                                                    fill(MicroMotionParams, tables["micromotion"], "<twin> [micromotion]"),
-                                                    bounds)
+        shape, quality = gait_fit.fit_pitch_profile(
+            profile, fill(GaitParams, gait, "<twin> [gait]"), fill(ImpactParams, tables["impact"], "<twin> [impact]"),
+            fill(MicroMotionParams, tables["micromotion"], "<twin> [micromotion]"), bounds)
         fitted.append((quality["rms_rate_misfit_fit_dps"], kind, quality,
                        {"gait": {**gait, **shape["gait"]}, "impact": {**tables["impact"], **shape["impact"]},
                         "micromotion": tables["micromotion"]}))
