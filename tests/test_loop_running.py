@@ -15,6 +15,7 @@ from gaitsim.loop import attribution, settings, twin
 from gaitsim.loop.frame import check_frame
 from gaitsim.loop.signature import signature
 from gaitsim.loop.strides import stance_intervals
+from gaitsim.measured import axes
 from gaitsim.measured.reference import as_measured
 from gaitsim.scenario import scenario_from_dict
 from gaitsim.simulate import simulate_walk
@@ -68,6 +69,16 @@ def test_the_strides_of_a_run_are_cut(rearfoot, forefoot):
         assert len(between) >= int(36.0 / 2.4) - 2
         assert len(sig.strides) >= 0.8 * len(between)  # regular strides (gyro onset to onset) for the signature
         assert check_frame(rec).is_body_frame
+
+
+@pytest.mark.parametrize("text", ["x,-y,-z", "y,-x,z", "-x,-y,z", "x,y,-z", "z,y,-x"])
+def test_the_frame_laws_hold_on_a_run(forefoot, text):
+    """Whatever signed permutation (a mirror included) a logger applied to a run, the frame check's map undoes it:
+    gravity at rest, the toes-down swing about +y, and the stride closure's handedness hold for a running foot."""
+    applied = axes.parse_axis_map(text)
+    found = check_frame(axes.remapped(forefoot, applied))
+    np.testing.assert_array_equal(found.axes @ applied, np.eye(3))
+    assert not found.is_body_frame
 
 
 @pytest.mark.parametrize("which, strike", [("rearfoot", "run-rearfoot"), ("forefoot", "run-forefoot")])
