@@ -27,6 +27,9 @@ stage none); a mount rotation about z is the change of the sensor's yaw on the f
 (:func:`gaitsim.loop.mount_fit.fit_yaw`). The bias ramp is outside the library: the loop must leave it
 unexplained.
 
+A run of the consumer sensor (:data:`RUNS`: a rearfoot strike at 170 steps/min, ``settings.BLIND_RUN_LENGTH_M``)
+takes every case too: the loop gives it a running twin (:mod:`gaitsim.loop.twin`).
+
 The same injections also go into shared measured recordings (:data:`MEASURED`: x-io's short walk, a walker the
 stance model was never fitted to, and gaitmap's right foot: real feet the twin reproduces only in part, with their
 own sensors' errors), for the effects a real recording's loop can be asked to see (:data:`MEASURED_CASES`), and
@@ -54,6 +57,7 @@ from . import effects as fx
 from .twin import TwinSimulator
 
 SENSORS = ("paper-vn200", "bmi160")
+RUNS = {"bmi160-run": ("bmi160", "run-rearfoot", 170.0)}  # source -> sensor preset, gait kind, steps/min
 TWIN_YAW = "twin_yaw"  # what a mount rotation about z is found as: the twin's fitted yaw on the foot, not an effect
 MEASURED = ("xio-ngimu/short_walk", "gaitmap-healthy/right")  # dataset/recording of the shared data
 
@@ -135,19 +139,23 @@ def cases(source: str) -> tuple[BlindCase, ...]:
     return MEASURED_CASES if source in MEASURED else CASES
 
 
-@lru_cache(maxsize=len(SENSORS) + len(MEASURED))
+@lru_cache(maxsize=len(SENSORS) + len(RUNS) + len(MEASURED))
 def base_recording(source: str, seed: int = settings.BLIND_SEED) -> Recording:
-    """The untouched recording of ``source``: a simulated sensor's measured-like walk (module docstring), or
-    a shared measured recording (``dataset/recording`` of :data:`MEASURED`, from the default data folder)."""
+    """The untouched recording of ``source``: a simulated sensor's measured-like walk (module docstring) or run
+    (:data:`RUNS`), or a shared measured recording (``dataset/recording`` of :data:`MEASURED`, from the default
+    data folder)."""
     if source in MEASURED:
         dataset, name = source.split("/")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the loader's data-quality counts are in the recording's meta
             return {r.meta["recording"]: r for r in load_dataset(dataset)}[name]
-    sensor = source
     doc = {"path": {"kind": "straight", "length_m": settings.BLIND_WALK_LENGTH_M},
-           "sampling": {"rate_hz": settings.BLIND_RATE_HZ}, "sensor": {"preset": sensor, "withhold": True}}
-    return as_measured(simulate_walk(scenario_from_dict(doc, f"<blind {sensor}>"), seed=seed),
+           "sampling": {"rate_hz": settings.BLIND_RATE_HZ}, "sensor": {"preset": source, "withhold": True}}
+    if source in RUNS:
+        sensor, kind, cadence = RUNS[source]
+        doc.update(path={"kind": "straight", "length_m": settings.BLIND_RUN_LENGTH_M},
+                   gait={"kind": kind, "cadence_steps_per_min": cadence}, sensor={"preset": sensor, "withhold": True})
+    return as_measured(simulate_walk(scenario_from_dict(doc, f"<blind {source}>"), seed=seed),
                        settings.BLIND_REFERENCE_RATE_HZ)
 
 

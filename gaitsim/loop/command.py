@@ -130,10 +130,10 @@ FOUND_AS = {"named": "yes", "unexplained": "yes", "equivalent": "as good as the 
 
 
 def _run_blind(folder: Path) -> list[str]:
-    """The blind table (:mod:`gaitsim.loop.blind`) of every simulated sensor and measured recording into
+    """The blind table (:mod:`gaitsim.loop.blind`) of every simulated sensor, run and measured recording into
     ``folder``/blind.md and blind.json."""
     rows, summary = [], []
-    for source in blind.SENSORS + blind.MEASURED:
+    for source in blind.SENSORS + tuple(blind.RUNS) + blind.MEASURED:
         untouched = blind.run(source, None)
         print(f"blind {source} untouched: {blind.named_effects(untouched)}", flush=True)
         inside, outside = [], []  # the library cases' rows, the case outside the library's found_as

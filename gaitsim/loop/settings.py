@@ -127,6 +127,7 @@ BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its brack
 
 # -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
 BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case
+BLIND_RUN_LENGTH_M = 40.0  # m, straight run of the running blind cases (16 strides of 2.4 m)
 BLIND_RATE_HZ = 200.0  # Hz, its IMU rate
 BLIND_REFERENCE_RATE_HZ = 100.0  # Hz, its position reference (like a motion tracker)
 BLIND_SEED = 11  # seed of the blind recordings
