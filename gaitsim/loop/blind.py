@@ -149,12 +149,12 @@ def base_recording(source: str, seed: int = settings.BLIND_SEED) -> Recording:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the loader's data-quality counts are in the recording's meta
             return {r.meta["recording"]: r for r in load_dataset(dataset)}[name]
-    doc = {"path": {"kind": "straight", "length_m": settings.BLIND_WALK_LENGTH_M},
-           "sampling": {"rate_hz": settings.BLIND_RATE_HZ}, "sensor": {"preset": source, "withhold": True}}
+    sensor, length = (RUNS[source][0], settings.BLIND_RUN_LENGTH_M) if source in RUNS else (source,
+                                                                                        settings.BLIND_WALK_LENGTH_M)
+    doc = {"path": {"kind": "straight", "length_m": length},
+           "sampling": {"rate_hz": settings.BLIND_RATE_HZ}, "sensor": {"preset": sensor, "withhold": True}}
     if source in RUNS:
-        sensor, kind, cadence = RUNS[source]
-        doc.update(path={"kind": "straight", "length_m": settings.BLIND_RUN_LENGTH_M},
-                   gait={"kind": kind, "cadence_steps_per_min": cadence}, sensor={"preset": sensor, "withhold": True})
+        doc["gait"] = {"kind": RUNS[source][1], "cadence_steps_per_min": RUNS[source][2]}
     return as_measured(simulate_walk(scenario_from_dict(doc, f"<blind {source}>"), seed=seed),
                        settings.BLIND_REFERENCE_RATE_HZ)
 

@@ -183,12 +183,12 @@ def fit_pitch_profile(measured: StrideProfile, gait: GaitParams, impact: ImpactP
 
     costs = {}
     for label, x in starts.items():
-        starts[label] = np.clip(x, low + inside, high - inside)
+        x = starts[label] = np.clip(x, low + inside, high - inside)
         if ORIGIN_SHIFT in names:  # each start judged at its best origin offset (grid over its range)
             k = names.index(ORIGIN_SHIFT)
             offsets = np.linspace(low[k] + inside[k], high[k] - inside[k], settings.ORIGIN_GRID_POINTS)
-            starts[label][k] = min(offsets, key=lambda o: float(np.sum(cost(np.r_[x[:k], o, x[k + 1:]]) ** 2)))
-        costs[label] = float(np.sum(cost(starts[label]) ** 2))
+            x[k] = min(offsets, key=lambda o: float(np.sum(cost(np.r_[x[:k], o, x[k + 1:]]) ** 2)))
+        costs[label] = float(np.sum(cost(x) ** 2))
     origin = min(costs, key=costs.get)
     found = least_squares(cost, starts[origin], bounds=(low, high), x_scale=high - low,
                           diff_step=settings.PITCH_FIT_DIFF_STEP,
