@@ -22,9 +22,9 @@ measured  the shared recordings (gaitmap-healthy, ucr-fgo, xio-ngimu) with the c
           settings (W 2/3/4 samples x threshold 2e4/3e4/4e4) to show how much a recording's score moves under
           small detector changes: the yardstick for "no worse".
 
-Per simulated case: true stances (foot flat), found, merged, ZUPTs in the swing (detected runs touching no
-ground contact, initial contact to toe off), and the final error in % of the walked distance (mean and worst
-over runs). Deterministic from the scenario's seed.
+Per simulated case: true stances (the truth's labelled stance: a walk's foot flat, a run's ground contact),
+found, merged, ZUPTs in the swing (detected runs touching no ground contact, initial contact to toe off), and the
+final error in % of the walked distance (mean and worst over runs). Deterministic from the scenario's seed.
 """
 
 from __future__ import annotations

@@ -55,7 +55,7 @@ from .imu.config import changed_sensor, sensor_from_table, sensor_table
 from .imu.model import SensorSpec
 from .world import path as paths
 from .world.foot import MOUNTS, Mount
-from .world.gait import GaitParams, ImpactParams, MicroMotionParams, Walk
+from .world.gait import LABELLED_STANCES, GaitParams, ImpactParams, MicroMotionParams, Walk
 from .world.gaits import kind_tables
 
 DEG = math.pi / 180.0  # rad per deg (deg/s and deg/s^2 convert alike)
@@ -233,6 +233,8 @@ def validate_gait(g: GaitParams, imp: ImpactParams, mm: MicroMotionParams, where
     if abs(total - 1) > 1e-9:
         raise _blamed(f"{where} [gait]", {k: gait[k] for k in fracs}, written,
                       f"the phase fractions must add up to 1 (they add up to {total:.6g})")
+    _require(g.labelled_stance in LABELLED_STANCES, f"{where} [gait]", "labelled_stance", g.labelled_stance,
+             f"allowed: {', '.join(repr(k) for k in LABELLED_STANCES)}")
     strike = "forefoot strike" if g.forefoot_strike else "heel strike"
     if (g.pitch_heel_strike > 0) != g.forefoot_strike or g.pitch_heel_strike == 0:
         raise _blamed(f"{where} [gait]", {"pitch_heel_strike_deg": gait["pitch_heel_strike_deg"],

@@ -25,6 +25,7 @@ from nav.recording import Events, Recording, Truth, write_recording_into
 from . import __version__
 from .imu.model import SensorSpec, apply_sensor
 from .scenario import Scenario, section_table
+from .world.gait import LABELLED_STANCES
 from .world.truth import simulate_truth
 
 IDEAL_SENSOR = {"name": "ideal", "withheld": False, "note": "imu.csv holds the exact truth (no sensor model)"}
@@ -57,7 +58,7 @@ def describe(scenario: Scenario, seed: int, run: int) -> dict:
         "impact": section_table(w.impact),
         "micromotion": section_table(w.micro),
         "mount": section_table(scenario.mount),
-        "stance_label": "foot flat: t_ff <= t < t_ho (events.csv)",
+        "stance_label": LABELLED_STANCES[w.gait.labelled_stance],
     }
 
 

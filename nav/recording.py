@@ -11,7 +11,8 @@ A recording is a folder anyone can read without this project:
 ``events.csv`` (simulated recordings)
     one row per stride: ``stride, t_ic, t_ff, t_ho, t_to, disp_x, disp_y, disp_z`` -- times (s) of initial
     contact, foot flat, heel off and toe off, and the true IMU displacement (m, world) over the labelled
-    stance [t_ff, t_ho).
+    stance, which ``meta.json``'s ``stance_label`` defines: the foot flat [t_ff, t_ho) of a simulated walk, the
+    ground contact [t_ic, t_to) of a simulated run.
 ``reference.csv`` (measured recordings, optional)
     ``t, pos_x, pos_y, pos_z`` in the recording's world frame (m), on the IMU clock.
 ``meta.json``
@@ -68,9 +69,10 @@ COLUMN_UNITS = {
         "gyr": "rad/s, body", "acc": "m/s^2, specific force, body",
         "dv": "m/s, velocity increment over [t_k, t_k+1] expressed in the body frame at t_k (sculling-exact)",
         "dth": "rad, rotation vector of the attitude increment over [t_k, t_k+1] (coning-exact)",
-        "stance": "1 inside the labelled stance (foot flat, t_ff <= t < t_ho), else 0",
+        "stance": "1 inside the labelled stance (meta.json stance_label), else 0",
     },
-    "events.csv": {"t_*": "s", "disp": "m, world ENU, true IMU displacement over [t_ff, t_ho)"},
+    "events.csv": {"t_*": "s", "disp": "m, world ENU, true IMU displacement over the labelled stance "
+                                       "(meta.json stance_label)"},
     "reference.csv": {"t": "s, IMU clock", "pos": "m, recording world frame"},
 }
 

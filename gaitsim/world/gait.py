@@ -7,8 +7,10 @@ foot flat -> standing at the end. Phase durations are fractions of the gait cycl
 A forefoot strike (``forefoot_strike``) lands on the forefoot, toes down, and rotates about the toe contact until
 the heel comes down at foot flat (a toe rocker in place of the heel rocker). Stop-and-go (``stop_every_strides``)
 turns every n-th stance into a stop: the foot stands exactly still for ``stop_duration_s`` more (no micro-motion;
-``StancePlan.walking`` is False for it, as for the standing at both ends). The labelled stance of every gait is
-the foot flat [t_ff, t_ho]: the only phase in which the whole foot, and so an IMU anywhere on it, is at rest.
+``StancePlan.walking`` is False for it, as for the standing at both ends). The labelled stance
+(``labelled_stance``, :data:`LABELLED_STANCES`) is the foot flat [t_ff, t_ho) of a walk, the only phase in which
+a walking foot, and so an IMU anywhere on it, is nearly at rest; a running foot is never at rest, and its labelled
+stance is the ground contact [t_ic, t_to), from initial contact (heel or forefoot) to toe off.
 Speed-dependent defaults of each gait are in :mod:`gaitsim.world.gaits`.
 
 Angles: foot pitch is the rotation about the foot's left (y) axis, positive when the toes point down; the foot
@@ -25,6 +27,10 @@ import numpy as np
 
 from .gaits import SWING_RELEASE_S
 from .path import Path
+
+# what the truth's stance label and events.csv's displacement cover, per ``GaitParams.labelled_stance``
+LABELLED_STANCES = {"foot_flat": "foot flat: t_ff <= t < t_ho (events.csv)",
+                    "contact": "ground contact, initial contact to toe off: t_ic <= t < t_to (events.csv)"}
 
 
 @dataclass(frozen=True)
@@ -78,6 +84,12 @@ class GaitParams:
     forefoot_strike : land on the forefoot and rotate about the toe contact down to foot flat. Default False.
     stop_every_strides : every n-th stance of the walk is a stop (0: none). Default 0.
     stop_duration_s : s, how much longer a stop stands (still) than a walking stance's foot flat. Default 3.0.
+    labelled_stance : which part of each stance the truth labels stance (``truth.csv``'s ``stance`` column, the
+        displacement in ``events.csv``; :data:`LABELLED_STANCES`): ``"foot_flat"`` [t_ff, t_ho), where a walking
+        foot is nearly still (what a zero-velocity detector should find), or ``"contact"`` [t_ic, t_to), the
+        whole ground contact from initial contact (heel, or forefoot for a forefoot strike) to toe off: the
+        stance of running gait analysis, whose foot is never still. Default ``"foot_flat"``; the running kinds
+        set ``"contact"`` (:mod:`gaitsim.world.gaits`).
     """
 
     cadence_steps_per_min: float = 84.0
@@ -108,6 +120,7 @@ class GaitParams:
     forefoot_strike: bool = False
     stop_every_strides: int = 0
     stop_duration_s: float = 3.0
+    labelled_stance: str = "foot_flat"
 
     @property
     def cycle_s(self) -> float:
@@ -275,6 +288,14 @@ class StancePlan:
     @property
     def n_strides(self) -> int:
         return len(self.t_ic) - 1
+
+    def labelled(self, labelled_stance: str) -> tuple[np.ndarray, np.ndarray]:
+        """(start, end) s of each stance's labelled part (``GaitParams.labelled_stance``): [t_ff, t_ho) for
+        ``"foot_flat"``, [t_ic, t_to) for ``"contact"``."""
+        if labelled_stance not in LABELLED_STANCES:
+            raise ValueError(f"labelled_stance = {labelled_stance!r} is not allowed; allowed: "
+                             f"{', '.join(LABELLED_STANCES)}")
+        return (self.t_ff, self.t_ho) if labelled_stance == "foot_flat" else (self.t_ic, self.t_to)
 
 
 def plan_stances(walk: Walk, rng: np.random.Generator) -> StancePlan:

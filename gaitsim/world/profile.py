@@ -513,12 +513,13 @@ class FootTrajectory:
         Returns
         -------
         joints : (6, 5, N) derivative stacks of the joints (:meth:`joints`).
-        stance_displacement : (n+1, 3) m, exact displacement over each foot flat [t_ff, t_ho] of the foot point
+        stance_displacement : (n+1, 3) m, exact displacement over each labelled stance (``GaitParams.
+            labelled_stance``: the foot flat [t_ff, t_ho] or the contact [t_ic, t_to]) of the foot point
             ``lever_arm`` (m, foot frame; the IMU site's for the truth).
         """
-        p = self.plan
-        ff, ho = np.split(foot_point(self.joints(np.concatenate([p.t_ff, p.t_ho]))[:, 0], lever_arm), 2)
-        return self.joints(t), ho - ff
+        bounds = np.concatenate(self.plan.labelled(self.walk.gait.labelled_stance))
+        start, end = np.split(foot_point(self.joints(bounds)[:, 0], lever_arm), 2)
+        return self.joints(t), end - start
 
 
 def foot_point(joints: np.ndarray, lever_arm: np.ndarray) -> np.ndarray:

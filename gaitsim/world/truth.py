@@ -39,13 +39,15 @@ def increments(t: np.ndarray, vel: np.ndarray, q: np.ndarray, gravity: float) ->
     return dv, dth
 
 
-def stance_labels(t: np.ndarray, plan: StancePlan) -> np.ndarray:
-    """True where ``t_ff <= t < t_ho`` of some stance (the last stance includes its end)."""
-    idx = np.searchsorted(plan.t_ff, t, side="right") - 1
+def stance_labels(t: np.ndarray, plan: StancePlan, labelled_stance: str) -> np.ndarray:
+    """True where ``start <= t < end`` of some stance's labelled part (:meth:`StancePlan.labelled`; the last
+    stance includes its end)."""
+    start, end = plan.labelled(labelled_stance)
+    idx = np.searchsorted(start, t, side="right") - 1
     ok = idx >= 0
     inside = np.zeros(t.size, bool)
-    inside[ok] = t[ok] < plan.t_ho[idx[ok]]
-    inside[t >= plan.t_ff[-1]] = True
+    inside[ok] = t[ok] < end[idx[ok]]
+    inside[t >= start[-1]] = True
     return inside
 
 
@@ -72,7 +74,7 @@ def simulate_truth(walk: Walk, mount: Mount, rate_hz: float, gravity: float,
     foot.check(qpos, qvel, qacc, s, check_rows(t, plan))
     dv, dth = increments(t, s.vel, s.quat, gravity)
     truth = Truth(t=t, pos=s.pos, vel=s.vel, quat=s.quat, gyr=s.gyr, acc=s.acc, dv=dv, dth=dth,
-                  stance=stance_labels(t, plan))
+                  stance=stance_labels(t, plan, walk.gait.labelled_stance))
     events = Events(t_ic=plan.t_ic, t_ff=plan.t_ff, t_ho=plan.t_ho, t_to=plan.t_to,
                     stance_displacement=displacement)
     return truth, events
