@@ -44,6 +44,18 @@
    one residual at the noise level adds) are reported with it as ``"equivalent"``: the recording does not tell
    them apart (e.g. the low-pass forms, which differ most above a fifth of the sample rate, where the
    comparison's noise is largest), and the named magnitude holds for the named form only.
+5b. the sensor's linear errors (``Effect.linear``: scales, accelerometer biases, the skew, the g-sensitivity) are
+   also fitted together (:func:`fit_joint`), when one of them moves the acted residual and two or more effects
+   are left in the budget: a real sensor has several at once, and one alone can stand in for a pair the
+   recording shows (a consumer accelerometer's offsets along x and z read as a z scale error, the x offset
+   hidden in the mount pitch the twin reads at rest; the greedy rounds then name proxies). One
+   forward-difference probe of each effect gives the slopes of the residuals' z; the linearised least squares
+   picks the sets of up to ``settings.JOINT_SIZE`` effects in which each member lowers the misfit by more than
+   one residual at the noise level (:func:`linear_sets`); the best few are refined by Gauss-Newton on the
+   simulated twin. The best set, judged as a single effect is (step 5), is named instead of the best single
+   effect when it leaves a misfit lower than that effect's by more than ``settings.NOISE_LEVEL ** 2``; each
+   member gets its own record (``joint_with`` the others), and the other refined sets within that margin are
+   reported as equivalent.
    Steps 4-5 repeat, each significant residual acted on once, until none is left or
    ``settings.MAX_EFFECTS`` effects have been added. A residual left unexplained does not count against that
    budget: it says what the twin cannot reproduce, and must not keep a smaller residual that an effect of the
@@ -61,6 +73,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import dataclasses
+import itertools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -237,9 +250,11 @@ class Fit:
 
     def summary(self) -> dict:
         return {"effect": self.effect.name, "magnitude": self.magnitude, "unit": self.effect.unit,
-                "fraction_explained": self.fraction, "q_before": self.q_before, "q_after": self.q_after,
-                "misfit_before": self.total_before, "misfit_after": self.total_after,
-                "made_worse": list(self.harmed), "at_search_bound": self.at_bound, "identifiable": self.identifiable}
+                **_judgement(self), "identifiable": self.identifiable}
+
+    def named(self) -> tuple:
+        """(effect, magnitude, scenario changes) of what naming this fit adds to the twin."""
+        return ((self.effect, self.magnitude, self.changes),)
 
     @property
     def identifiable(self) -> bool:
@@ -249,9 +264,56 @@ class Fit:
 
     @property
     def acceptable(self) -> bool:
-        return (self.identifiable and (self.fraction >= settings.EXPLAINED_FRACTION or self.closes_acted)
-                and self.q_after < self.q_before and self.total_after < self.total_before and not self.harmed
-                and not self.at_bound)
+        return _acceptable(self)
+
+
+@dataclass
+class JointFit:
+    """Linear sensor effects fitted together (:func:`fit_joint`): ``members`` are (effect, magnitude) pairs added
+    to the twin in order, ``changes`` their scenario changes, each in the context of the twin before it;
+    ``alternatives`` the other sets refined by simulation whose misfit came within ``settings.NOISE_LEVEL ** 2``
+    of this one's ((misfit, members), best first). Judged like a :class:`Fit` (:func:`judged`)."""
+
+    members: tuple
+    changes: tuple
+    residuals: dict
+    side: Side
+    q_before: float
+    q_after: float
+    fraction: float = 0.0
+    harmed: tuple = ()
+    total_before: float = math.nan
+    total_after: float = math.nan
+    closes_acted: bool = False
+    at_bound: bool = False
+    alternatives: tuple = ()
+    identifiable = True  # every linear effect moves signature residuals
+
+    def summary(self) -> dict:
+        return {"effect": " + ".join(e.name for e, _ in self.members),
+                "members": [{"effect": e.name, "magnitude": m, "unit": e.unit} for e, m in self.members],
+                **_judgement(self), "identifiable": True}
+
+    def named(self) -> tuple:
+        return tuple((e, m, c) for (e, m), c in zip(self.members, self.changes))
+
+    @property
+    def acceptable(self) -> bool:
+        return _acceptable(self)
+
+
+def _judgement(fit) -> dict:
+    """What :func:`judged` found of a fit, as reported."""
+    return {"fraction_explained": fit.fraction, "q_before": fit.q_before, "q_after": fit.q_after,
+            "misfit_before": fit.total_before, "misfit_after": fit.total_after, "made_worse": list(fit.harmed),
+            "at_search_bound": fit.at_bound}
+
+
+def _acceptable(fit) -> bool:
+    """Step 5's rule (module docstring) for a :class:`Fit` or a :class:`JointFit` after :func:`judged`."""
+    return (fit.identifiable and (fit.fraction >= settings.EXPLAINED_FRACTION or fit.closes_acted)
+            and fit.q_after < fit.q_before and fit.total_after < fit.total_before and not fit.harmed
+            and not fit.at_bound)
 
 
 def fit_effect(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin, measured: Side, base: dict, ctx: dict,
@@ -315,7 +377,7 @@ def _fit_magnitude(simulate: tw.TwinSimulator, effect: fx.Effect, twin: tw.Twin,
                at_bound=bool(best <= axis[0] + edge or best >= axis[-1] - edge))
 
 
-def judged(fit: Fit, base: dict, acted: str) -> Fit:
+def judged(fit: Fit | JointFit, base: dict, acted: str) -> Fit | JointFit:
     """``fit`` with the fraction of ``acted`` it explains, whether it closes ``acted`` (to the noise level, moved
     toward zero by at least its uncertainty) and the other residuals it makes worse: at the noise level before,
     beyond ``settings.HARM_FACTOR`` times it after (a residual that was already off may move either way while
@@ -340,15 +402,148 @@ def equivalent(best: Fit, fits: list) -> list:
                   key=lambda f: f.total_after)
 
 
-def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list) -> dict:
+def _joint_names(base: dict) -> list:
+    """The residuals a joint fit works on: those :func:`gaitsim.loop.residuals.signature_misfit` sums, but for the
+    Fig. 5 ones (a threshold sweep of every probe would cost ~5x its signature)."""
+    return [name for name, r in base.items() if not name.startswith("nav_") and name not in fig5.NUMBERS
+            and name not in settings.DERIVED + settings.REFITTED and math.isfinite(r.z)]
+
+
+def _signed_z(res: dict, names: list) -> np.ndarray:
+    """value / uncertainty of each residual of ``names`` (0 where it is missing or has no uncertainty)."""
+    return np.array([res[n].value / res[n].uncertainty if n in res and math.isfinite(res[n].value)
+                     and res[n].uncertainty > 0 else 0.0 for n in names])
+
+
+def _with_members(twin: tw.Twin, members, measured: Side, twin_signature: Signature) -> tuple[tw.Twin, tuple]:
+    """``twin`` with the (effect, magnitude) ``members`` added in order, each in the context of the twin before it,
+    and their scenario changes (a linear effect's context holds no simulated number: ``twin_signature`` is the
+    round's)."""
+    changes = []
+    for effect, magnitude in members:
+        ctx = fx.context(measured.recording, twin.scenario, measured.signature, twin_signature)
+        change = effect.changes(float(magnitude), ctx)
+        twin = twin.with_changes(change)
+        changes.append(change)
+    return twin, tuple(changes)
+
+
+def _probe(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, noise: dict, names: list, members,
+           twin_signature: Signature) -> np.ndarray | None:
+    """The signed z (:func:`_signed_z`) of ``names`` for ``twin`` with ``members`` added (None when that twin shows
+    no regular strides)."""
+    try:
+        changed, _ = _with_members(twin, members, measured, twin_signature)
+        side = simulate_side(simulate, tw.match_noise(changed, simulate), measured, False)
+    except (ValueError, RecordingError):
+        return None
+    return _signed_z(compare(measured, side, noise), names)
+
+
+def _refine(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, noise: dict, names: list, effects: list,
+            start, steps, bounds, twin_signature: Signature) -> tuple[float, np.ndarray]:
+    """Gauss-Newton on the simulated residuals from the linearised magnitudes ``start`` of ``effects`` (each
+    iteration a forward difference of ``steps`` per effect, every magnitude held inside its ``bounds``), at most
+    ``settings.JOINT_ITERATIONS`` steps, each kept only while it lowers the misfit: (misfit, magnitudes)."""
+    m = np.asarray(start, float)
+    low, high = np.array(bounds, float).T
+    best = (math.inf, m)
+    for iteration in range(settings.JOINT_ITERATIONS + 1):
+        z = _probe(simulate, twin, measured, noise, names, tuple(zip(effects, m)), twin_signature)
+        if z is None or float(z @ z) >= best[0]:
+            break
+        best = (float(z @ z), m)
+        if iteration == settings.JOINT_ITERATIONS:
+            break
+        columns = []
+        for i, h in enumerate(steps):
+            moved = m.copy()
+            moved[i] += h
+            zi = _probe(simulate, twin, measured, noise, names, tuple(zip(effects, moved)), twin_signature)
+            if zi is None:
+                return best
+            columns.append((zi - z) / h)
+        step, *_ = np.linalg.lstsq(np.stack(columns, axis=1), -z, rcond=None)
+        m = np.clip(m + step, low, high)
+    return best
+
+
+def linear_sets(columns: dict, z0: np.ndarray, bounds: list, size: int) -> list:
+    """The sets of the linearised fit worth refining: every set of up to ``size`` of the effects whose residual
+    slopes are ``columns`` (index -> (n,) dz per unit magnitude) fitted by least squares to close ``z0`` (every
+    magnitude inside its ``bounds``); the set size is the largest whose best set lowers the misfit ``|z|^2`` by
+    more than ``settings.NOISE_LEVEL ** 2`` below the best set one smaller (each member earns its place as one
+    residual at the noise level would). Returns (misfit, indices, magnitudes) of the best
+    ``settings.JOINT_SUBSETS`` sets of that size, best first; empty when that size is below 2."""
+    best = {0: float(z0 @ z0)}
+    found = {}
+    for k in range(1, size + 1):
+        fits = []
+        for combo in itertools.combinations(sorted(columns), k):
+            slopes = np.stack([columns[i] for i in combo], axis=1)
+            m, *_ = np.linalg.lstsq(slopes, -z0, rcond=None)
+            if all(bounds[i][0] < mi < bounds[i][1] for i, mi in zip(combo, m)):
+                left = z0 + slopes @ m
+                fits.append((float(left @ left), combo, m))
+        fits.sort(key=lambda f: f[0])
+        if not fits or fits[0][0] > best[k - 1] - settings.NOISE_LEVEL ** 2:
+            break
+        best[k], found[k] = fits[0][0], fits
+    k = max(found, default=0)
+    return found[k][:settings.JOINT_SUBSETS] if k >= 2 else []
+
+
+def fit_joint(workers: "Workers", effects: list, twin: tw.Twin, measured: Side, base: dict, ctx: dict,
+              noise: dict, size: int, twin_signature: Signature) -> JointFit | None:
+    """The sensor's linear errors fitted together (module docstring, step 5b): one forward-difference probe of
+    each of ``effects`` (linear, ``settings.JOINT_STEP_SHARE`` of its search range) gives the slopes of the signed
+    z of the residuals (:func:`_joint_names`); :func:`linear_sets` picks the sets of up to ``size`` effects the
+    data support; each is refined by Gauss-Newton on the simulated twin (:func:`_refine`) and the best is
+    simulated once more with navigation, as a :class:`Fit` is. None when no set of two or more is supported.
+    Probes and refinements are independent tasks of ``workers``."""
+    names = _joint_names(base)
+    if size < 2 or len(effects) < 2 or not names:
+        return None
+    bounds = [e.search_bounds(ctx) for e in effects]
+    steps = [settings.JOINT_STEP_SHARE * (high - low) for low, high in bounds]
+    n = len(effects) + 1  # the twin as it is first: its noise re-matched as every probe's is
+    z0, *probes = workers.map(_probe, [twin] * n, [measured] * n, [noise] * n, [names] * n,
+                              [()] + [((e, h),) for e, h in zip(effects, steps)], [twin_signature] * n)
+    if z0 is None:
+        return None
+    columns = {i: (z - z0) / steps[i] for i, z in enumerate(probes) if z is not None}
+    sets = linear_sets(columns, z0, bounds, size)
+    if not sets:
+        return None
+    chosen = [[effects[i] for i in combo] for _, combo, _ in sets]
+    k = len(sets)
+    refined = list(workers.map(_refine, [twin] * k, [measured] * k, [noise] * k, [names] * k, chosen,
+                               [m for _, _, m in sets], [[steps[i] for i in combo] for _, combo, _ in sets],
+                               [[bounds[i] for i in combo] for _, combo, _ in sets], [twin_signature] * k))
+    order = sorted(range(k), key=lambda j: refined[j][0])
+    misfit, magnitudes = refined[order[0]]
+    if not math.isfinite(misfit):
+        return None
+    members = tuple(zip(chosen[order[0]], (float(m) for m in magnitudes)))
+    changed, changes = _with_members(twin, members, measured, twin_signature)
+    side = simulate_side(workers.simulate, tw.match_noise(changed, workers.simulate), measured, True)
+    res = compare(measured, side, noise)
+    moved = [name for name in base if any(name in e.moves for e, _ in members) and not name.startswith("nav_")
+             and name not in fig5.NUMBERS]
+    at_bound = any(not low + settings.BRENT_TOLERANCE * (high - low) < m < high - settings.BRENT_TOLERANCE * (high - low)
+                   for (_, m), (low, high) in zip(members, (bounds[effects.index(e)] for e, _ in members)))
+    alternatives = tuple((refined[j][0], tuple(zip(chosen[j], (float(m) for m in refined[j][1]))))
+                         for j in order[1:] if refined[j][0] <= misfit + settings.NOISE_LEVEL ** 2)
+    return JointFit(members, changes, res, side, _q(base, moved), _q(res, moved), at_bound=at_bound,
+                    alternatives=alternatives)
+
+
+def _records(acted: Residual, best: Fit | JointFit | None, accepted: bool, candidates: list) -> list:
+    """The attribution records of one round: one per effect named (a joint fit names several, each record
+    saying which others it was fitted with), or one ``"unexplained"``."""
     after = best.residuals.get(acted.name) if (best is not None and accepted) else None
-    return {
+    common = {
         "residual": acted.name, "unit": acted.unit, "z_before": acted.z,
-        "effect": best.effect.name if accepted else "unexplained",
-        "scenario_key": best.effect.key if accepted else None,
-        "scenario_changes": best.changes if accepted else None,
-        "magnitude": best.magnitude if accepted else None,
-        "magnitude_unit": best.effect.unit if accepted else None,
         "residual_before": acted.value, "uncertainty_before": acted.uncertainty,
         "residual_after": after.value if after is not None else acted.value,
         "uncertainty_after": after.uncertainty if after is not None else acted.uncertainty,
@@ -356,9 +551,27 @@ def _record(acted: Residual, best: Fit | None, accepted: bool, candidates: list)
         "fraction_explained": best.fraction if (best is not None and accepted) else
         (max(0.0, best.fraction) if best is not None else 0.0),
         "best_candidate": best.summary() if best is not None else None,
-        "equivalent": [c.summary() for c in equivalent(best, candidates)] if accepted else [],
+        "equivalent": _equivalent_entries(best, candidates) if accepted else [],
         "candidates": [c.summary() for c in candidates],
     }
+    if not accepted:
+        return [{**common, "effect": "unexplained", "scenario_key": None, "scenario_changes": None, "magnitude": None,
+                 "magnitude_unit": None}]
+    named = best.named()
+    return [{**common, "effect": effect.name, "scenario_key": effect.key, "scenario_changes": changes,
+             "magnitude": magnitude, "magnitude_unit": effect.unit,
+             **({"joint_with": [e.name for e, _, _ in named if e is not effect]} if len(named) > 1 else {})}
+            for effect, magnitude, changes in named]
+
+
+def _equivalent_entries(best: Fit | JointFit, candidates: list) -> list:
+    """The fits reported as fitting as well as ``best`` (:func:`equivalent`), and a joint fit's alternative sets,
+    one entry per member (``with``: the other members of its set)."""
+    out = [c.summary() for c in equivalent(best, candidates)]
+    for misfit, members in getattr(best, "alternatives", ()):
+        out += [{"effect": e.name, "magnitude": m, "unit": e.unit, "misfit_after": misfit,
+                 "with": [other.name for other, _ in members if other is not e]} for e, m in members]
+    return out
 
 
 def unmovable(res: dict, library: tuple) -> list:
@@ -468,7 +681,7 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
     ctx = fx.context(rec, base_twin.scenario, measured.signature, before.signature)
     for acted in unmovable(current, fx.LIBRARY):
         acted_names.add(acted.name)
-        attributions.append(_record(acted, None, False, []))
+        attributions += _records(acted, None, False, [])
         progress.note(f"{acted.name} (z = {acted.z:.1f}): moved by no effect of the library, unexplained")
     round_number = 0
     while len(used) < max_effects:
@@ -495,14 +708,29 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
         ranked_fits = sorted(fits, key=lambda f: (f.acceptable, -f.total_after), reverse=True)
         best = ranked_fits[0] if ranked_fits else None
         accepted = best is not None and best.acceptable
-        attributions.append(_record(acted, best, accepted, fits))
+        linear = [e for e in fx.LIBRARY if e.linear and e.name not in used and fx.applicable(e, ctx)]
+        if any(acted.name in e.moves for e in linear) and max_effects - len(used) >= 2:
+            progress.note(f"round {round_number}, {acted.name}: {len(linear)} linear sensor effects fitted together")
+            joint = fit_joint(workers, linear, current_twin, measured, current, ctx, noise,
+                              min(settings.JOINT_SIZE, max_effects - len(used)), current_side.signature)
+            joint = joint if joint is None else judged(joint, current, acted.name)
+            if joint is not None and joint.acceptable and (
+                    not accepted or joint.total_after < best.total_after - settings.NOISE_LEVEL ** 2):
+                best, accepted = joint, True
+        attributions += _records(acted, best, accepted, fits)
         progress.note(f"round {round_number}, {acted.name}: " + (
-            f"{best.effect.name} = {best.magnitude:.4g} {best.effect.unit}, explains {best.fraction:.0%}"
-            if accepted else "unexplained"))
+            ", ".join(f"{e.name} = {m:.4g} {e.unit}" for e, m, _ in best.named())
+            + f", explains {best.fraction:.0%}" if accepted else "unexplained"))
         if accepted:
-            used.add(best.effect.name)
             fitted = {}
-            current_twin = tw.with_effect(current_twin, best.changes, measured.signature, simulate)
+            named = best.named()
+            for k, (effect, magnitude, changes) in enumerate(named):
+                used.add(effect.name)
+                if k:  # a later member of a joint fit in the context of the twin with the ones before it (the
+                    # linear effects' context holds no simulated number: the round's signature serves)
+                    changes = effect.changes(magnitude, fx.context(rec, current_twin.scenario, measured.signature,
+                                                                   current_side.signature))
+                current_twin = tw.with_effect(current_twin, changes, measured.signature, simulate)
             current_side = simulate_side(simulate, current_twin, measured, True)
             current = compare(measured, current_side, noise)
     return LoopResult(measured, base_twin, current_twin, before, current_side, first, current, attributions,

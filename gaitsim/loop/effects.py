@@ -35,6 +35,11 @@ g-sensitivity errors apart: each turns gravity or the specific force its own way
 ``rest_gyro_change`` and ``rest_acc_change`` residuals (a sensor drift between the first and the last rest) are
 moved by no effect: a drifting bias is outside the library and is reported unexplained.
 
+The sensor's linear errors (scales, accelerometer biases, the skew, the g-sensitivity: ``Effect.linear``) are
+also fitted together: a real sensor has several at once, and one of them alone can stand in for a pair (a
+consumer accelerometer's offsets along x and z read as a z scale error, the x offset hidden in the mount pitch
+fitted at rest; :func:`gaitsim.loop.attribution.fit_joint`).
+
 Roll and pitch of the sensor on the foot are part of the twin's mount fit (gravity at rest), so the library's
 misalignment is the remaining yaw. A fitted magnitude equal to the twin's current value means "no change".
 """
@@ -81,6 +86,10 @@ class Effect:
     first_guess : (residuals, context) -> magnitude or None, a closed-form estimate from the residuals.
     refine : the context (a direction) comes from the residuals: fit once more from the first fit's residuals.
     sweeps : its magnitude is searched on the Fig. 5 residuals it moves too (each candidate twin swept).
+    linear : a deterministic linear error of the sensor (scale, bias, skew, g-sensitivity): magnitude 0 leaves
+        the twin as it is (the skew is the twin's own only until the effect is named, and a named effect is not
+        fitted again) and small magnitudes move the residuals in proportion, so such effects are also fitted
+        together, several at once (:func:`gaitsim.loop.attribution.fit_joint`).
     """
 
     name: str
@@ -94,6 +103,7 @@ class Effect:
     log_scale: bool = False
     refine: bool = False
     sweeps: bool = False
+    linear: bool = False
 
     def search_bounds(self, context: dict) -> tuple[float, float]:
         """Bounds for this recording: a bandwidth stays below ``settings.BAND_TOP_SHARE`` times the sample rate; a
@@ -252,21 +262,23 @@ LIBRARY: tuple[Effect, ...] = (
     Effect("accel_gyro_skew", "time skew between accelerometer and gyro sampling (> 0: gyro later)",
            "[sensor] accel_gyro_skew", "ms", ("acc_gyro_lag",) + GYR_PROFILES + CLOSURE, (-20.0, 20.0),
            lambda m, ctx: _sensor(accel_gyro_skew=[m, "ms"]),
-           lambda res, ctx: None if _value(res, "acc_gyro_lag") is None else -_value(res, "acc_gyro_lag")),
+           lambda res, ctx: None if _value(res, "acc_gyro_lag") is None else -_value(res, "acc_gyro_lag"),
+           linear=True),
     *(Effect(f"{sensor}_scale_{axis}", f"{label} scale factor error of the sensor's {axis} axis alone",
              f"[sensor] {sensor}_misalignment[{i}][{i}]", "%", CLOSURE + profiles + NAV + extra, (-6.0, 6.0),
-             lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}))
+             lambda m, ctx, key=f"{sensor}_misalignment", i=i: _sensor(**{key: [_scaled_axis(ctx[key], i, m), "1"]}),
+             linear=True)
       for sensor, label, profiles, extra in (("gyro", "gyro", GYR_PROFILES, ()),
                                              ("accel", "accelerometer", ACC_PROFILES, ("rest_acc_norm",)))
       for i, axis in enumerate("xyz")),
     *(Effect(f"accel_bias_{axis}", f"accelerometer bias of the sensor's {axis} axis",
              f"[sensor] accel_bias[{i}]", "m/s^2", CLOSURE + ACC_PROFILES + NAV + ("rest_acc_norm",), (-1.5, 1.5),
-             lambda m, ctx, i=i: _bias_changes(i, m, ctx), _bias_guess(i))
+             lambda m, ctx, i=i: _bias_changes(i, m, ctx), _bias_guess(i), linear=True)
       for i, axis in enumerate("xyz")),
     Effect("g_sensitivity", "gyro g-sensitivity, equal on the three axes (G_g = k I, added to the twin's; the "
            "twin's gyro bias, found at rest where the g-sensitivity acts too, loses k times the rest specific force)",
            "[sensor] gyro_g_sensitivity, gyro_bias", "deg/s/(m/s^2)", ("closure_roll", "closure_pitch") + NAV,
-           (-0.05, 0.05), _g_sensitivity_changes),
+           (-0.05, 0.05), _g_sensitivity_changes, linear=True),
     Effect("saturation", "accelerometer range limit (clipping)", "[sensor] accel_range", "m/s^2",
            ("acc_peak", "hf40", "hf80", "onset_hf") + ACC_PROFILES, (20.0, 400.0),
            lambda m, ctx: _sensor(accel_range=[m, "m/s^2"]),

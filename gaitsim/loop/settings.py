@@ -124,6 +124,10 @@ MAX_EFFECTS = 6  # effects added to a twin per recording at most (a residual lef
 GRID_POINTS = 7  # grid of each effect's magnitude search before the Brent refinement
 BRENT_ITERATIONS = 8  # iterations of the bounded Brent refinement
 BRENT_TOLERANCE = 1e-3  # 1, Brent's magnitude tolerance as a share of its bracket
+JOINT_SIZE = 3  # linear sensor effects fitted together at most (attribution.fit_joint)
+JOINT_STEP_SHARE = 0.05  # 1, finite-difference step of a linear effect, as a share of its search range
+JOINT_SUBSETS = 3  # best sets of the linearised fit refined by simulation
+JOINT_ITERATIONS = 3  # Gauss-Newton iterations of each refinement
 
 # -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
 BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case
