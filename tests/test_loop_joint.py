@@ -23,7 +23,7 @@ def test_two_effects_at_once_are_found_with_their_magnitudes_and_no_third_member
     columns = slopes()
     noise = np.random.default_rng(8).normal(0.0, 0.2, 40)
     z0 = -(2.0 * columns[1] - 0.5 * columns[3]) + noise
-    sets = linear_sets(columns, z0, BOUNDS, 3)
+    sets = linear_sets(columns, z0, BOUNDS, 3, {1})
     misfit, combo, magnitudes = sets[0]
     assert combo == (1, 3)
     np.testing.assert_allclose(magnitudes, [2.0, -0.5], atol=0.05)
@@ -34,7 +34,7 @@ def test_two_effects_at_once_are_found_with_their_magnitudes_and_no_third_member
 def test_one_effect_alone_is_left_to_the_single_fits():
     columns = slopes()
     z0 = -1.5 * columns[2] + np.random.default_rng(8).normal(0.0, 0.2, 40)
-    assert linear_sets(columns, z0, BOUNDS, 3) == []
+    assert linear_sets(columns, z0, BOUNDS, 3, {2}) == []
 
 
 def test_a_set_whose_magnitude_leaves_its_search_range_is_not_a_candidate():
@@ -43,7 +43,7 @@ def test_a_set_whose_magnitude_leaves_its_search_range_is_not_a_candidate():
     z0 = -(2.0 * columns[1] - 0.5 * columns[3])
     bounds = list(BOUNDS)
     bounds[1] = (-1.0, 1.0)
-    assert all(1 not in combo for _, combo, _ in linear_sets(columns, z0, bounds, 3))
+    assert all(1 not in combo for _, combo, _ in linear_sets(columns, z0, bounds, 3, {3}))
 
 
 @pytest.mark.xdist_group("blind-paper-vn200")

@@ -49,12 +49,15 @@
    are left in the budget: a real sensor has several at once, and one alone can stand in for a pair the
    recording shows (a consumer accelerometer's offsets along x and z read as a z scale error, the x offset
    hidden in the mount pitch the twin reads at rest; the greedy rounds then name proxies). One
-   forward-difference probe of each effect gives the slopes of the residuals' z; the linearised least squares
-   picks the sets of up to ``settings.JOINT_SIZE`` effects in which each member lowers the misfit by more than
-   one residual at the noise level (:func:`linear_sets`); the best few are refined by Gauss-Newton on the
-   simulated twin. The best set, judged as a single effect is (step 5), is named instead of the best single
-   effect when it leaves a misfit lower than that effect's by more than ``settings.NOISE_LEVEL ** 2``; each
-   member gets its own record (``joint_with`` the others), and the other refined sets within that margin are
+   forward-difference probe of each effect gives the slopes of the signed z of the scalar signature residuals
+   (not the phase profiles, whose residual is an rms: :func:`_joint_names`); the linearised least squares keeps
+   the sets of up to ``settings.JOINT_SIZE`` effects that hold an effect moving the acted residual and in which
+   every member earns its place: the set's misfit lies more than ``settings.NOISE_LEVEL ** 2`` below that of each
+   set without one of its members (:func:`linear_sets`). The best few are refined by Gauss-Newton on the
+   simulated twin and judged as a single effect is (step 5); of the acceptable sets and the best single effect,
+   the one with the lowest misfit plus ``settings.NOISE_LEVEL ** 2`` per member beyond the first is named (a
+   larger set must fit better by one residual at the noise level per added member). Each member gets its own
+   record (``joint_with`` the others); acceptable sets and single effects within the margin of step 5 are
    reported as equivalent.
    Steps 4-5 repeat, each significant residual acted on once, until none is left or
    ``settings.MAX_EFFECTS`` effects have been added. A residual left unexplained does not count against that
@@ -270,14 +273,12 @@ class Fit:
 @dataclass
 class JointFit:
     """Linear sensor effects fitted together (:func:`fit_joint`): ``members`` are (effect, magnitude) pairs added
-    to the twin in order, ``changes`` their scenario changes, each in the context of the twin before it;
-    ``alternatives`` the other sets refined by simulation whose misfit came within ``settings.NOISE_LEVEL ** 2``
-    of this one's ((misfit, members), best first). Judged like a :class:`Fit` (:func:`judged`)."""
+    to the twin in order, ``changes`` their scenario changes, each in the context of the twin before it. Judged
+    like a :class:`Fit` (:func:`judged`)."""
 
     members: tuple
     changes: tuple
     residuals: dict
-    side: Side
     q_before: float
     q_after: float
     fraction: float = 0.0
@@ -286,7 +287,6 @@ class JointFit:
     total_after: float = math.nan
     closes_acted: bool = False
     at_bound: bool = False
-    alternatives: tuple = ()
     identifiable = True  # every linear effect moves signature residuals
 
     def summary(self) -> dict:
@@ -402,38 +402,47 @@ def equivalent(best: Fit, fits: list) -> list:
                   key=lambda f: f.total_after)
 
 
-def _joint_names(base: dict) -> list:
-    """The residuals a joint fit works on: those :func:`gaitsim.loop.residuals.signature_misfit` sums, but for the
-    Fig. 5 ones (a threshold sweep of every probe would cost ~5x its signature)."""
-    return [name for name, r in base.items() if not name.startswith("nav_") and name not in fig5.NUMBERS
-            and name not in settings.DERIVED + settings.REFITTED and math.isfinite(r.z)]
+def add_effects(twin: tw.Twin, effects, measured: Side, simulate: tw.TwinSimulator,
+                twin_signature: Signature | None = None, refit: bool = True) -> tuple[tw.Twin, tuple]:
+    """``twin`` with the (effect, magnitude) ``effects`` added in order, each in the context of the twin with the
+    ones before it (:func:`gaitsim.loop.effects.context`), and the scenario changes each added. With ``refit`` an
+    effect is added as the loop adds it (:func:`gaitsim.loop.twin.with_effect`: the yaw re-fitted, the noise
+    re-matched), without it only its changes (as a magnitude search tries it). The context's twin signature is
+    ``twin_signature`` for every effect, or, when None, the twin so far simulated again before each (an effect
+    whose context holds a simulated number, a stance rotation's direction, needs it; a linear effect's does not)."""
+    added = []
+    for effect, magnitude in effects:
+        signature_now = (simulate_side(simulate, twin, measured, False).signature if twin_signature is None
+                         else twin_signature)
+        change = effect.changes(float(magnitude), fx.context(measured.recording, twin.scenario, measured.signature,
+                                                             signature_now))
+        twin = tw.with_effect(twin, change, measured.signature, simulate) if refit else twin.with_changes(change)
+        added.append(change)
+    return twin, tuple(added)
 
 
 def _signed_z(res: dict, names: list) -> np.ndarray:
-    """value / uncertainty of each residual of ``names`` (0 where it is missing or has no uncertainty)."""
+    """value / uncertainty of each residual of ``names`` (NaN where it is missing)."""
     return np.array([res[n].value / res[n].uncertainty if n in res and math.isfinite(res[n].value)
-                     and res[n].uncertainty > 0 else 0.0 for n in names])
+                     and res[n].uncertainty > 0 else np.nan for n in names])
 
 
-def _with_members(twin: tw.Twin, members, measured: Side, twin_signature: Signature) -> tuple[tw.Twin, tuple]:
-    """``twin`` with the (effect, magnitude) ``members`` added in order, each in the context of the twin before it,
-    and their scenario changes (a linear effect's context holds no simulated number: ``twin_signature`` is the
-    round's)."""
-    changes = []
-    for effect, magnitude in members:
-        ctx = fx.context(measured.recording, twin.scenario, measured.signature, twin_signature)
-        change = effect.changes(float(magnitude), ctx)
-        twin = twin.with_changes(change)
-        changes.append(change)
-    return twin, tuple(changes)
+def _joint_names(base: dict) -> list:
+    """The residuals a joint fit works on: the scalar ones :func:`gaitsim.loop.residuals.signature_misfit` sums,
+    whose signed values a linear model can follow. Left to the simulated check of each refined set: the phase
+    profiles (each residual an rms over the phases, never negative; fitted phase by phase, the shape the twin's
+    gait misses was taken up by sensor errors the recording does not have) and the Fig. 5 residuals (a threshold
+    sweep of every probe would cost ~5x its signature)."""
+    return [name for name, r in base.items() if not name.startswith(("nav_", "profile_")) and name not in fig5.NUMBERS
+            and name not in settings.DERIVED + settings.REFITTED and math.isfinite(r.z)]
 
 
 def _probe(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, noise: dict, names: list, members,
            twin_signature: Signature) -> np.ndarray | None:
-    """The signed z (:func:`_signed_z`) of ``names`` for ``twin`` with ``members`` added (None when that twin shows
-    no regular strides)."""
+    """:func:`_signed_z` of ``names`` for ``twin`` with ``members`` added as a magnitude search tries them (None
+    when that twin shows no regular strides)."""
     try:
-        changed, _ = _with_members(twin, members, measured, twin_signature)
+        changed, _ = add_effects(twin, members, measured, simulate, twin_signature, refit=False)
         side = simulate_side(simulate, tw.match_noise(changed, simulate), measured, False)
     except (ValueError, RecordingError):
         return None
@@ -441,109 +450,154 @@ def _probe(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, noise: dic
 
 
 def _refine(simulate: tw.TwinSimulator, twin: tw.Twin, measured: Side, noise: dict, names: list, effects: list,
-            start, steps, bounds, twin_signature: Signature) -> tuple[float, np.ndarray]:
+            start, steps, bounds, twin_signature: Signature) -> tuple[float, list, np.ndarray]:
     """Gauss-Newton on the simulated residuals from the linearised magnitudes ``start`` of ``effects`` (each
     iteration a forward difference of ``steps`` per effect, every magnitude held inside its ``bounds``), at most
-    ``settings.JOINT_ITERATIONS`` steps, each kept only while it lowers the misfit: (misfit, magnitudes)."""
-    m = np.asarray(start, float)
+    ``settings.JOINT_ITERATIONS`` steps, a step that does not lower the misfit halved once; then every member must
+    still earn its place in the simulation: while leaving one out (the others at their magnitudes) raises the
+    misfit by less than ``settings.NOISE_LEVEL ** 2``, the one that costs least is left out. Returns (misfit,
+    effects kept, their magnitudes); residuals a probe lacks count as zero."""
     low, high = np.array(bounds, float).T
-    best = (math.inf, m)
-    for iteration in range(settings.JOINT_ITERATIONS + 1):
-        z = _probe(simulate, twin, measured, noise, names, tuple(zip(effects, m)), twin_signature)
-        if z is None or float(z @ z) >= best[0]:
-            break
-        best = (float(z @ z), m)
-        if iteration == settings.JOINT_ITERATIONS:
-            break
+
+    def misfit(chosen, m):
+        z = _probe(simulate, twin, measured, noise, names, tuple(zip(chosen, m)), twin_signature)
+        return (math.inf, None) if z is None else (float(np.nansum(z ** 2)), np.nan_to_num(z))
+
+    def slopes(m, z):
         columns = []
         for i, h in enumerate(steps):
             moved = m.copy()
             moved[i] += h
-            zi = _probe(simulate, twin, measured, noise, names, tuple(zip(effects, moved)), twin_signature)
-            if zi is None:
-                return best
-            columns.append((zi - z) / h)
-        step, *_ = np.linalg.lstsq(np.stack(columns, axis=1), -z, rcond=None)
-        m = np.clip(m + step, low, high)
-    return best
+            z_i = misfit(effects, moved)[1]
+            if z_i is None:
+                return None
+            columns.append((z_i - z) / h)
+        return np.stack(columns, axis=1)
+
+    m = np.asarray(start, float)
+    q, z = misfit(effects, m)
+    for _ in range(settings.JOINT_ITERATIONS):
+        jacobian = None if z is None else slopes(m, z)
+        if jacobian is None:
+            break
+        step, *_ = np.linalg.lstsq(jacobian, -z, rcond=None)
+        for share in (1.0, 0.5):
+            trial = np.clip(m + share * step, low, high)
+            q_trial, z_trial = misfit(effects, trial)
+            if q_trial < q:
+                m, q, z = trial, q_trial, z_trial
+                break
+        else:
+            break
+    kept = list(range(len(effects)))
+    while len(kept) > 1 and math.isfinite(q):
+        without = [misfit([effects[j] for j in kept if j != i], [m[j] for j in kept if j != i])[0] for i in kept]
+        cheapest = int(np.argmin(without))
+        if without[cheapest] - q >= settings.NOISE_LEVEL ** 2:
+            break
+        q = without[cheapest]
+        kept.pop(cheapest)
+    return q, [effects[j] for j in kept], m[kept]
 
 
-def linear_sets(columns: dict, z0: np.ndarray, bounds: list, size: int) -> list:
-    """The sets of the linearised fit worth refining: every set of up to ``size`` of the effects whose residual
-    slopes are ``columns`` (index -> (n,) dz per unit magnitude) fitted by least squares to close ``z0`` (every
-    magnitude inside its ``bounds``); the set size is the largest whose best set lowers the misfit ``|z|^2`` by
-    more than ``settings.NOISE_LEVEL ** 2`` below the best set one smaller (each member earns its place as one
-    residual at the noise level would). Returns (misfit, indices, magnitudes) of the best
-    ``settings.JOINT_SUBSETS`` sets of that size, best first; empty when that size is below 2."""
-    best = {0: float(z0 @ z0)}
-    found = {}
+def linear_sets(columns: dict, z0: np.ndarray, bounds: list, size: int, required: set) -> list:
+    """The sets of the linearised fit worth refining. Every set of 2 to ``size`` of the effects whose slopes are
+    ``columns`` (index -> slopes of the residuals' signed z per unit magnitude) is fitted by least squares to close
+    ``z0``; a set qualifies when it holds an effect of ``required``, every magnitude lies inside its ``bounds``,
+    and every member earns its place: the set's misfit ``|z|^2`` lies more than ``settings.NOISE_LEVEL ** 2``
+    below that of each set without one of its members (one residual at the noise level). Returns (misfit,
+    indices, magnitudes) of the ``settings.JOINT_SUBSETS`` qualifying sets with the lowest misfit plus
+    ``settings.NOISE_LEVEL ** 2`` per member beyond the first (the score the loop names by), best first."""
+    fitted = {}
     for k in range(1, size + 1):
-        fits = []
         for combo in itertools.combinations(sorted(columns), k):
             slopes = np.stack([columns[i] for i in combo], axis=1)
             m, *_ = np.linalg.lstsq(slopes, -z0, rcond=None)
-            if all(bounds[i][0] < mi < bounds[i][1] for i, mi in zip(combo, m)):
-                left = z0 + slopes @ m
-                fits.append((float(left @ left), combo, m))
-        fits.sort(key=lambda f: f[0])
-        if not fits or fits[0][0] > best[k - 1] - settings.NOISE_LEVEL ** 2:
-            break
-        best[k], found[k] = fits[0][0], fits
-    k = max(found, default=0)
-    return found[k][:settings.JOINT_SUBSETS] if k >= 2 else []
+            left = z0 + slopes @ m
+            fitted[combo] = (float(left @ left), m)
+    qualifying = []
+    for combo, (misfit, m) in fitted.items():
+        if len(combo) < 2 or not required & set(combo):
+            continue
+        without = min(fitted[tuple(i for i in combo if i != j)][0] for j in combo)
+        if misfit < without - settings.NOISE_LEVEL ** 2 and all(bounds[i][0] < mi < bounds[i][1]
+                                                               for i, mi in zip(combo, m)):
+            qualifying.append((misfit, combo, m))
+    return sorted(qualifying, key=lambda f: f[0] + (len(f[1]) - 1) * settings.NOISE_LEVEL ** 2)[:settings.JOINT_SUBSETS]
 
 
 def fit_joint(workers: "Workers", effects: list, twin: tw.Twin, measured: Side, base: dict, ctx: dict,
-              noise: dict, size: int, twin_signature: Signature) -> JointFit | None:
+              noise: dict, size: int, twin_signature: Signature, acted: str, cache: dict) -> list:
     """The sensor's linear errors fitted together (module docstring, step 5b): one forward-difference probe of
-    each of ``effects`` (linear, ``settings.JOINT_STEP_SHARE`` of its search range) gives the slopes of the signed
-    z of the residuals (:func:`_joint_names`); :func:`linear_sets` picks the sets of up to ``size`` effects the
-    data support; each is refined by Gauss-Newton on the simulated twin (:func:`_refine`) and the best is
-    simulated once more with navigation, as a :class:`Fit` is. None when no set of two or more is supported.
-    Probes and refinements are independent tasks of ``workers``."""
+    each of ``effects`` (linear, ``settings.JOINT_STEP_SHARE`` of its search range) gives the slopes of the
+    residuals' signed z (:func:`_joint_names`; only those every probe has); :func:`linear_sets` picks the sets of
+    up to ``size`` effects the data support, each holding an effect that moves ``acted``; each is refined by
+    Gauss-Newton on the simulated twin, its members pruned to those that earn their place there (:func:`_refine`),
+    and simulated once more with navigation, as a :class:`Fit` is (a set pruned to one effect is left to the
+    single fits, one pruned of every effect that moves ``acted`` is dropped). Returns those fits (to be :func:`judged`), best misfit first. Probes and refinements are
+    independent tasks of ``workers``; ``cache`` keeps them for the same twin (a later round on it)."""
     names = _joint_names(base)
     if size < 2 or len(effects) < 2 or not names:
-        return None
+        return []
     bounds = [e.search_bounds(ctx) for e in effects]
     steps = [settings.JOINT_STEP_SHARE * (high - low) for low, high in bounds]
-    n = len(effects) + 1  # the twin as it is first: its noise re-matched as every probe's is
-    z0, *probes = workers.map(_probe, [twin] * n, [measured] * n, [noise] * n, [names] * n,
-                              [()] + [((e, h),) for e, h in zip(effects, steps)], [twin_signature] * n)
+    if "probes" not in cache:
+        n = len(effects) + 1  # the twin as it is first: its noise re-matched as every probe's is
+        cache["probes"] = list(workers.map(_probe, [twin] * n, [measured] * n, [noise] * n, [names] * n,
+                                           [()] + [((e, h),) for e, h in zip(effects, steps)], [twin_signature] * n))
+    z0, *probes = cache["probes"]
     if z0 is None:
+        return []
+    kept = np.all([np.isfinite(z) for z in [z0] + [p for p in probes if p is not None]], axis=0)
+    columns = {i: (z[kept] - z0[kept]) / steps[i] for i, z in enumerate(probes) if z is not None}
+    required = {i for i, e in enumerate(effects) if acted in e.moves}
+    sets = linear_sets(columns, z0[kept], bounds, size, required)
+    new = [(combo, m) for _, combo, m in sets if combo not in cache]
+    k = len(new)
+    for (combo, _), (_, kept, magnitudes) in zip(new, workers.map(
+            _refine, [twin] * k, [measured] * k, [noise] * k, [names] * k,
+            [[effects[i] for i in combo] for combo, _ in new], [m for _, m in new],
+            [[steps[i] for i in combo] for combo, _ in new], [[bounds[i] for i in combo] for combo, _ in new],
+            [twin_signature] * k)):
+        cache[combo] = None if len(kept) < 2 or not any(acted in e.moves for e in kept) else _joint_fit(
+            workers.simulate, kept, magnitudes, [bounds[effects.index(e)] for e in kept], twin, measured, base,
+            noise, twin_signature)
+    fits = [cache[combo] for _, combo, _ in sets if cache[combo] is not None]
+    return sorted(fits, key=lambda f: residuals.signature_misfit(f.residuals))
+
+
+def _joint_fit(simulate: tw.TwinSimulator, effects: list, magnitudes, bounds: list, twin: tw.Twin, measured: Side,
+               base: dict, noise: dict, twin_signature: Signature) -> JointFit | None:
+    """The refined set simulated with navigation and compared (None when that twin shows no regular strides)."""
+    members = tuple(zip(effects, (float(m) for m in magnitudes)))
+    try:
+        changed, changes = add_effects(twin, members, measured, simulate, twin_signature, refit=False)
+        side = simulate_side(simulate, tw.match_noise(changed, simulate), measured, True)
+    except (ValueError, RecordingError):
         return None
-    columns = {i: (z - z0) / steps[i] for i, z in enumerate(probes) if z is not None}
-    sets = linear_sets(columns, z0, bounds, size)
-    if not sets:
-        return None
-    chosen = [[effects[i] for i in combo] for _, combo, _ in sets]
-    k = len(sets)
-    refined = list(workers.map(_refine, [twin] * k, [measured] * k, [noise] * k, [names] * k, chosen,
-                               [m for _, _, m in sets], [[steps[i] for i in combo] for _, combo, _ in sets],
-                               [[bounds[i] for i in combo] for _, combo, _ in sets], [twin_signature] * k))
-    order = sorted(range(k), key=lambda j: refined[j][0])
-    misfit, magnitudes = refined[order[0]]
-    if not math.isfinite(misfit):
-        return None
-    members = tuple(zip(chosen[order[0]], (float(m) for m in magnitudes)))
-    changed, changes = _with_members(twin, members, measured, twin_signature)
-    side = simulate_side(workers.simulate, tw.match_noise(changed, workers.simulate), measured, True)
     res = compare(measured, side, noise)
-    moved = [name for name in base if any(name in e.moves for e, _ in members) and not name.startswith("nav_")
+    moved = [name for name in base if any(name in e.moves for e in effects) and not name.startswith("nav_")
              and name not in fig5.NUMBERS]
-    at_bound = any(not low + settings.BRENT_TOLERANCE * (high - low) < m < high - settings.BRENT_TOLERANCE * (high - low)
-                   for (_, m), (low, high) in zip(members, (bounds[effects.index(e)] for e, _ in members)))
-    alternatives = tuple((refined[j][0], tuple(zip(chosen[j], (float(m) for m in refined[j][1]))))
-                         for j in order[1:] if refined[j][0] <= misfit + settings.NOISE_LEVEL ** 2)
-    return JointFit(members, changes, res, side, _q(base, moved), _q(res, moved), at_bound=at_bound,
-                    alternatives=alternatives)
+    edges = [settings.JOINT_BOUND_SHARE * (high - low) for low, high in bounds]
+    at_bound = any(not low + edge < m < high - edge for (_, m), (low, high), edge in zip(members, bounds, edges))
+    return JointFit(members, changes, res, _q(base, moved), _q(res, moved), at_bound=at_bound)
 
 
-def _records(acted: Residual, best: Fit | JointFit | None, accepted: bool, candidates: list) -> list:
-    """The attribution records of one round: one per effect named (a joint fit names several, each record
-    saying which others it was fitted with), or one ``"unexplained"``."""
+def _records(acted: Residual, best: Fit | JointFit | None, accepted: bool, candidates: list,
+             applied: tuple = ()) -> list:
+    """The attribution records of one round: one per effect named, with the scenario changes ``applied`` to the
+    twin (a joint fit names several, each record saying which others it was fitted with), or one
+    ``"unexplained"``."""
     after = best.residuals.get(acted.name) if (best is not None and accepted) else None
-    common = {
+    named = best.named() if accepted else ((None, None, None),)
+    return [{
         "residual": acted.name, "unit": acted.unit, "z_before": acted.z,
+        "effect": effect.name if accepted else "unexplained",
+        "scenario_key": effect.key if accepted else None,
+        "scenario_changes": changes if accepted else None,
+        "magnitude": magnitude if accepted else None,
+        "magnitude_unit": effect.unit if accepted else None,
+        **({"joint_with": [e.name for e, _, _ in named if e is not effect]} if len(named) > 1 else {}),
         "residual_before": acted.value, "uncertainty_before": acted.uncertainty,
         "residual_after": after.value if after is not None else acted.value,
         "uncertainty_after": after.uncertainty if after is not None else acted.uncertainty,
@@ -553,24 +607,19 @@ def _records(acted: Residual, best: Fit | JointFit | None, accepted: bool, candi
         "best_candidate": best.summary() if best is not None else None,
         "equivalent": _equivalent_entries(best, candidates) if accepted else [],
         "candidates": [c.summary() for c in candidates],
-    }
-    if not accepted:
-        return [{**common, "effect": "unexplained", "scenario_key": None, "scenario_changes": None, "magnitude": None,
-                 "magnitude_unit": None}]
-    named = best.named()
-    return [{**common, "effect": effect.name, "scenario_key": effect.key, "scenario_changes": changes,
-             "magnitude": magnitude, "magnitude_unit": effect.unit,
-             **({"joint_with": [e.name for e, _, _ in named if e is not effect]} if len(named) > 1 else {})}
-            for effect, magnitude, changes in named]
+    } for (effect, magnitude, _), changes in zip(named, applied or (None,) * len(named))]
 
 
 def _equivalent_entries(best: Fit | JointFit, candidates: list) -> list:
-    """The fits reported as fitting as well as ``best`` (:func:`equivalent`), and a joint fit's alternative sets,
-    one entry per member (``with``: the other members of its set)."""
-    out = [c.summary() for c in equivalent(best, candidates)]
-    for misfit, members in getattr(best, "alternatives", ()):
-        out += [{"effect": e.name, "magnitude": m, "unit": e.unit, "misfit_after": misfit,
-                 "with": [other.name for other, _ in members if other is not e]} for e, m in members]
+    """The candidates reported as fitting as well as ``best`` (:func:`equivalent`), a joint set one entry per
+    member (``with``: the other members of its set)."""
+    out = []
+    for fit in equivalent(best, candidates):
+        summary = fit.summary()
+        out += [summary] if isinstance(fit, Fit) else [
+            {**member, "with": [m["effect"] for m in summary["members"] if m is not member],
+             **{k: v for k, v in summary.items() if k not in ("effect", "members")}}
+            for member in summary["members"]]
     return out
 
 
@@ -678,6 +727,7 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
     attributions, acted_names, used = [], set(), set()
     fitted = {}  # effect name -> its fit to the current twin (an effect's fit depends on the twin, not on the
     # residual acted on: fitted once per twin)
+    joint_cache = {}  # the joint fit's probes and refined sets on the current twin
     ctx = fx.context(rec, base_twin.scenario, measured.signature, before.signature)
     for acted in unmovable(current, fx.LIBRARY):
         acted_names.add(acted.name)
@@ -711,27 +761,32 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
         linear = [e for e in fx.LIBRARY if e.linear and e.name not in used and fx.applicable(e, ctx)]
         if any(acted.name in e.moves for e in linear) and max_effects - len(used) >= 2:
             progress.note(f"round {round_number}, {acted.name}: {len(linear)} linear sensor effects fitted together")
-            joint = fit_joint(workers, linear, current_twin, measured, current, ctx, noise,
-                              min(settings.JOINT_SIZE, max_effects - len(used)), current_side.signature)
-            joint = joint if joint is None else judged(joint, current, acted.name)
-            if joint is not None and joint.acceptable and (
-                    not accepted or joint.total_after < best.total_after - settings.NOISE_LEVEL ** 2):
-                best, accepted = joint, True
-        attributions += _records(acted, best, accepted, fits)
+            joints = [judged(j, current, acted.name) for j in fit_joint(
+                workers, linear, current_twin, measured, current, ctx, noise, min(settings.JOINT_SIZE, max_effects
+                                                                               - len(used)),
+                current_side.signature, acted.name, joint_cache)]
+            fits += joints
+            if any(j.acceptable for j in joints):  # each member beyond the first pays one residual at the noise level
+                best = min([j for j in joints if j.acceptable] + ([best] if accepted else []),
+                           key=lambda f: f.total_after + (len(f.named()) - 1) * settings.NOISE_LEVEL ** 2)
+                accepted = True
         progress.note(f"round {round_number}, {acted.name}: " + (
             ", ".join(f"{e.name} = {m:.4g} {e.unit}" for e, m, _ in best.named())
             + f", explains {best.fraction:.0%}" if accepted else "unexplained"))
-        if accepted:
-            fitted = {}
-            named = best.named()
-            for k, (effect, magnitude, changes) in enumerate(named):
-                used.add(effect.name)
-                if k:  # a later member of a joint fit in the context of the twin with the ones before it (the
-                    # linear effects' context holds no simulated number: the round's signature serves)
-                    changes = effect.changes(magnitude, fx.context(rec, current_twin.scenario, measured.signature,
-                                                                   current_side.signature))
-                current_twin = tw.with_effect(current_twin, changes, measured.signature, simulate)
-            current_side = simulate_side(simulate, current_twin, measured, True)
-            current = compare(measured, current_side, noise)
+        if not accepted:
+            attributions += _records(acted, best, accepted, fits)
+            continue
+        if isinstance(best, JointFit):  # each member in the context of the twin with the ones before it, as the
+            # held-out transfer adds them (gaitsim.loop.transfer.with_effects)
+            current_twin, applied = add_effects(current_twin, [(e, m) for e, m, _ in best.named()], measured,
+                                                simulate, current_side.signature)
+        else:
+            current_twin, applied = tw.with_effect(current_twin, best.changes, measured.signature, simulate), \
+                (best.changes,)
+        attributions += _records(acted, best, accepted, fits, applied)
+        used.update(e.name for e, _, _ in best.named())
+        fitted, joint_cache = {}, {}
+        current_side = simulate_side(simulate, current_twin, measured, True)
+        current = compare(measured, current_side, noise)
     return LoopResult(measured, base_twin, current_twin, before, current_side, first, current, attributions,
                       noise, ctx, frame)

@@ -88,8 +88,9 @@ class Effect:
     sweeps : its magnitude is searched on the Fig. 5 residuals it moves too (each candidate twin swept).
     linear : a deterministic linear error of the sensor (scale, bias, skew, g-sensitivity): magnitude 0 leaves
         the twin as it is (the skew is the twin's own only until the effect is named, and a named effect is not
-        fitted again) and small magnitudes move the residuals in proportion, so such effects are also fitted
-        together, several at once (:func:`gaitsim.loop.attribution.fit_joint`).
+        fitted again) and small magnitudes change the sensor output in proportion, so such effects are also fitted
+        together, several at once, on a model linearised about the twin and refined by simulation
+        (:func:`gaitsim.loop.attribution.fit_joint`).
     """
 
     name: str

@@ -123,6 +123,8 @@ def markdown(result: att.LoopResult, label: str, figures: list[str]) -> str:
         best = a.get("best_candidate") or {}
         effect = a["effect"] if a["effect"] != "unexplained" else (
             f"unexplained (best: {best.get('effect', '-')}, {best.get('fraction_explained', 0):.0%})")
+        if a.get("joint_with"):
+            effect += f" (fitted together with {', '.join(a['joint_with'])})"
         if a.get("equivalent"):
             alternatives = ", ".join(f"{e['effect']} {shown(e['magnitude'])} {e['unit']}" for e in a["equivalent"])
             effect += f" (as good: {alternatives})"

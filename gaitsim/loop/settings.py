@@ -128,6 +128,8 @@ JOINT_SIZE = 3  # linear sensor effects fitted together at most (attribution.fit
 JOINT_STEP_SHARE = 0.05  # 1, finite-difference step of a linear effect, as a share of its search range
 JOINT_SUBSETS = 3  # best sets of the linearised fit refined by simulation
 JOINT_ITERATIONS = 3  # Gauss-Newton iterations of each refinement
+JOINT_BOUND_SHARE = 1e-3  # 1, a refined magnitude this close to its search range's edge (a share of the range) is
+# on the edge: no estimate
 
 # -- blind tests (gaitsim.loop.blind) ------------------------------------------------------------------------
 BLIND_WALK_LENGTH_M = 20.0  # m, straight walk of every blind case

@@ -83,12 +83,8 @@ def with_effects(target: att.LoopResult, effects: list[tuple[str, float]],
                  simulate: tw.TwinSimulator) -> tw.Twin:
     """The target's default twin with ``effects`` added in order, each in the context of the twin so far and as
     the loop adds it (:func:`gaitsim.loop.twin.with_effect`)."""
-    twin = target.twin_before
-    for name, magnitude in effects:
-        scenario_side = att.simulate_side(simulate, twin, target.measured, False)
-        ctx = fx.context(target.measured.recording, twin.scenario, target.measured.signature, scenario_side.signature)
-        twin = tw.with_effect(twin, fx.BY_NAME[name].changes(magnitude, ctx), target.measured.signature, simulate)
-    return twin
+    return att.add_effects(target.twin_before, [(fx.BY_NAME[name], magnitude) for name, magnitude in effects],
+                           target.measured, simulate)[0]
 
 
 def predict(source_label: str, source: att.LoopResult, target_label: str, target: att.LoopResult,
