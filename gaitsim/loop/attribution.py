@@ -394,7 +394,7 @@ def judged(fit: Fit | JointFit, base: dict, acted: str) -> Fit | JointFit:
                                total_after=residuals.signature_misfit(res))
 
 
-def equivalent(best: Fit, fits: list) -> list:
+def equivalent(best: Fit | JointFit, fits: list) -> list:
     """The acceptable fits other than ``best`` whose signature misfit after lies within
     ``settings.NOISE_LEVEL ** 2`` of ``best``'s, smallest misfit first (module docstring, step 5)."""
     margin = best.total_after + settings.NOISE_LEVEL ** 2
@@ -759,12 +759,12 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
         best = ranked_fits[0] if ranked_fits else None
         accepted = best is not None and best.acceptable
         linear = [e for e in fx.LIBRARY if e.linear and e.name not in used and fx.applicable(e, ctx)]
-        if any(acted.name in e.moves for e in linear) and max_effects - len(used) >= 2:
+        size = min(settings.JOINT_SIZE, max_effects - len(used))
+        if any(acted.name in e.moves for e in linear) and size >= 2:
             progress.note(f"round {round_number}, {acted.name}: {len(linear)} linear sensor effects fitted together")
             joints = [judged(j, current, acted.name) for j in fit_joint(
-                workers, linear, current_twin, measured, current, ctx, noise, min(settings.JOINT_SIZE, max_effects
-                                                                               - len(used)),
-                current_side.signature, acted.name, joint_cache)]
+                workers, linear, current_twin, measured, current, ctx, noise, size, current_side.signature,
+                acted.name, joint_cache)]
             fits += joints
             if any(j.acceptable for j in joints):  # each member beyond the first pays one residual at the noise level
                 best = min([j for j in joints if j.acceptable] + ([best] if accepted else []),
@@ -780,7 +780,7 @@ def _run_loop(rec: Recording, max_effects: int, progress: Progress, axis_map: st
             # held-out transfer adds them (gaitsim.loop.transfer.with_effects)
             current_twin, applied = add_effects(current_twin, [(e, m) for e, m, _ in best.named()], measured,
                                                 simulate, current_side.signature)
-        else:
+        else:  # a single fit's own changes: a refined fit's context (Effect.refine) is not the round's
             current_twin, applied = tw.with_effect(current_twin, best.changes, measured.signature, simulate), \
                 (best.changes,)
         attributions += _records(acted, best, accepted, fits, applied)

@@ -106,8 +106,8 @@ Potter et al., Sensors 19(11):2601, 2019). The same study bounds the rate from b
 2000 to 1500 or 1000 deg/s left the speed dependence of its ZUPT stride metrics as it was (slope differences 0.00
 and +0.05 %/(m/s), p 0.99 and 0.81, its appendix A), a cut to 750 deg/s did not (-0.40, p < 0.05): feet above 750
 deg/s long enough to matter, above 1000 too briefly to. The simulated 1000-1040 deg/s lie in that band; the test
-keeps the issue's ~1500 as the figure to reach. Where the running peak falls: the foot's pitch-rate extremes mark toe off
-and foot contact (Falbriard et al., Front. Physiol. 9:610, 2018), as here (the peak is the toe-off rate). Not
+keeps the issue's ~1500 as the figure to reach. Where the running peak falls: the foot's pitch-rate extremes mark
+toe off and foot contact (Falbriard et al., Front. Physiol. 9:610, 2018), as here (the peak is the toe-off rate). Not
 reproduced: the rearfoot strikers' heel-to-toe rollover, whose peak sagittal rate is 846 deg/s (the mean
 for the shoe of medium midsole bending stiffness, the lowest of the five shoes' means; Braeuer et al., Sensors
 21(15):5010, 2021) against 250 / 265 / 424 deg/s here at 150 / 165 / 180 steps/min (median over strides): it
