@@ -16,13 +16,12 @@ updates and the per-run nominal state.
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 from numba import njit
 
 from nav._numba.covariance import propagate
-from nav_speed import best_time  # a sibling script (benchmarks/ is on the path)
+from nav_speed import best_cpu_seconds  # a sibling script (benchmarks/ is on the path)
 
 STATES = 15
 STEPS = 20_000
@@ -113,9 +112,9 @@ def main(argv=None) -> int:
         if not np.array_equal(each, together.transpose(2, 0, 1)):
             print(f"R={runs}: lock-step differs from nav's propagate")
             return 1
-        one = best_time(lambda: propagate_each(P.copy(), STEPS, h, a, C, f, power), args.repeats, time.process_time)
-        lock = best_time(lambda: propagate_runs(lanes[0].copy(), STEPS, h, lanes[1], lanes[2], power), args.repeats,
-                         time.process_time)
+        one = best_cpu_seconds(lambda: propagate_each(P.copy(), STEPS, h, a, C, f, power), args.repeats)
+        lock = best_cpu_seconds(lambda: propagate_runs(lanes[0].copy(), STEPS, h, lanes[1], lanes[2], power),
+                                args.repeats)
         scale = 1e9 / (STEPS * runs)
         print(f"  R={runs:4d}: one run after another {one * scale:5.0f} ns, lock-step {lock * scale:5.0f} ns per run "
               f"and interval (bit-identical)")

@@ -15,7 +15,6 @@ sample, the injection of the correction (quaternion exponential, product, normal
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +28,7 @@ from nav._numba.ekf import _inject, _store
 from nav._numba.strapdown import MODE_POINT_SAMPLES, apply_increment, increment_buffers, interval_increments
 from nav.alignment import align
 from nav.ekf import FilterConfig, run_filter
-from nav_speed import best_time  # a sibling script (benchmarks/ is on the path)
+from nav_speed import best_cpu_seconds  # a sibling script (benchmarks/ is on the path)
 
 ROOT = Path(__file__).resolve().parents[1]
 STATES = 15
@@ -178,7 +177,7 @@ def main(argv=None) -> int:
     _injections(10, dx)
 
     def cpu(fn):
-        return best_time(fn, args.repeats, time.process_time)
+        return best_cpu_seconds(fn, args.repeats)
 
     parts = {
         "SHOE detection, per sample": cpu(lambda: detectors.detect("shoe", rec.t, rec.acc, rec.gyr)) / rec.n,

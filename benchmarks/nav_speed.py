@@ -81,6 +81,11 @@ def interleaved_seconds(calls: dict, rounds: int) -> dict:
     return seconds
 
 
+def best_cpu_seconds(call, repeats: int) -> float:
+    """The shortest CPU time (s, all threads of this process) of ``repeats`` calls of ``call``."""
+    return interleaved_seconds({"call": call}, repeats)["call"][:, 1].min()
+
+
 def ratio_text(faster: np.ndarray, slower: np.ndarray) -> str:
     """The ratio of the best times, and the median and range of the per-round ratios (slower / faster)."""
     per_round = slower / faster
