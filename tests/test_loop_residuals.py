@@ -72,6 +72,31 @@ def test_accelerometer_scale_shows_in_the_rest_norm(reference_pair):
     assert res.measured / res.twin == pytest.approx(1.01, abs=2e-4)
 
 
+def _rest_noise(rec, acc, gyr) -> tuple[float, ...]:
+    """(lag 1, lag 2) of the accelerometer's rest noise, then the gyro's."""
+    sig = signature(rec.t, acc, gyr)
+    return tuple(sig.scalars[f"rest_{s}_noise_lag{k}"].value for s in ("acc", "gyro") for k in (1, 2))
+
+
+def test_the_rest_noise_reads_white_and_a_numpy_rc_stage_reads_its_closed_form(reference_pair):
+    """The first difference of white noise has autocorrelation -1/2 at lag 1 and 0 at lag 2 (in blocks of 32 samples,
+    less their mean and straight line, the estimate reads -0.471 and -0.014: 200,000 samples); after a first-order
+    stage y[k] = b y[k-1] + (1 - b) x[k] (numpy, here on the gyro alone) it has -(1 - b) / 2 and -b (1 - b) / 2,
+    and the accelerometer's stay white. A slow sway of the resting foot (1 Hz, 3.5 times the accelerometer noise's
+    sd) changes neither sensor's."""
+    (rec, _), _ = reference_pair
+    white = _rest_noise(rec, rec.acc, rec.gyr)
+    assert white == pytest.approx((-0.47, -0.01, -0.47, -0.01), abs=0.05)  # ~3 se over the walk's ~18 blocks
+    b = np.exp(-2 * np.pi * 25.0 / 200.0)
+    smoothed = rec.gyr.copy()
+    for k in range(1, len(smoothed)):
+        smoothed[k] = b * smoothed[k - 1] + (1 - b) * rec.gyr[k]
+    expected = (*white[:2], -(1 - b) / 2, -b * (1 - b) / 2)
+    assert _rest_noise(rec, rec.acc, smoothed) == pytest.approx(expected, abs=0.05)
+    sway = 0.05 * np.sin(2 * np.pi * 1.0 * rec.t)[:, None] * np.array([1.0, 1.0, 0.0])
+    assert _rest_noise(rec, rec.acc + sway, rec.gyr) == pytest.approx(white, abs=0.01)
+
+
 def test_gyro_delay_shows_as_negative_acc_gyro_lag(reference_pair):
     (_, base), _ = reference_pair
     _, skewed = _walk(1, {"accel_gyro_skew": [8.0, "ms"]})

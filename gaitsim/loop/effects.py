@@ -13,7 +13,7 @@ re-run the sensor model on the cached walk).
 | stance_roll | [micromotion] stance_roll_rate_dps | deg/s | stance_gyro, stance_acc_spread, stance_duration |
 | stance_rotation | [micromotion] stance_rotation_dps (direction from the residual) | deg/s | stance_rate_x/y/z, stance_gyro, stance_acc_spread, stance_duration, stance_velocity, Fig. 5, nav_length_ratio |
 | impact_ringing | [impact] ringing_accel_mps2 (ringing_hz from the residual spectrum) | m/s^2 | onset_hf, hf40, hf80, acc_peak, stance_acc_spread, stance_duration |
-| bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
+| bandwidth | [sensor] accel_bandwidth = gyro_bandwidth | Hz | rest_acc_noise_lag1, _lag2, rest_gyro_noise_lag1, _lag2, hf40, hf80, onset_hf, acc_peak, gyr_peak, acc_gyro_lag, stance_acc_spread, stance_duration, profiles |
 | accel_gyro_skew | [sensor] accel_gyro_skew | ms | acc_gyro_lag, gyro profiles |
 | bandwidth_first_order | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1 | Hz | as bandwidth |
 | bandwidth_analogue | [sensor] accel_bandwidth = gyro_bandwidth, filter_order = 1, filter_kind = "analogue" | Hz | as bandwidth |
@@ -66,6 +66,7 @@ GYR_PROFILES = ("profile_gyr_x", "profile_gyr_y", "profile_gyr_z")
 CLOSURE = ("closure_forward", "closure_left", "closure_up", "closure_roll", "closure_pitch")
 NAV = ("nav_length_ratio", "nav_heading_drift", "nav_final_error")
 FIG5 = tuple(fig5.NUMBERS)
+REST_NOISE = tuple(f"rest_{sensor}_noise_lag{lag}" for sensor in ("acc", "gyro") for lag in (1, 2))
 # the stance model's rotation rates (scenario keys, [micromotion]) that stance_kinematics scales together
 STANCE_RATE_KEYS = ("heel_rise_rate_start_dps", "heel_rise_growth_dps3", "loading_roll_rate_dps", "pronation_rate_dps")
 
@@ -254,8 +255,8 @@ LIBRARY: tuple[Effect, ...] = (
            lambda m, ctx: {"impact": {"ringing_hz": ctx["ringing_hz"], "ringing_accel_mps2": m}}),
     *(Effect(name, f"low-pass of the sensor ({kind} Butterworth of order {order}, same cutoff on both sensors)",
              "[sensor] accel_bandwidth, gyro_bandwidth, filter_order, filter_kind", "Hz",
-             ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag", "stance_acc_spread",
-              "stance_duration") + ACC_PROFILES + GYR_PROFILES + CLOSURE, (8.0, 400.0),
+             REST_NOISE + ("hf40", "hf80", "onset_hf", "acc_peak", "gyr_peak", "acc_gyro_lag", "stance_acc_spread",
+                           "stance_duration") + ACC_PROFILES + GYR_PROFILES + CLOSURE, (8.0, 400.0),
              lambda m, ctx, order=order, kind=kind: _sensor(accel_bandwidth=[m, "Hz"], gyro_bandwidth=[m, "Hz"],
                                                             filter_order=order, filter_kind=kind), log_scale=True)
       for name, order, kind in (("bandwidth", 2, "digital"), ("bandwidth_first_order", 1, "digital"),

@@ -26,7 +26,8 @@ UNITS = {
     "stance_gyro": "deg/s", **{f"stance_rate_{a}": "deg/s" for a in "xyz"}, "stance_acc_spread": "m/s^2", "stance_duration": "s", "stance_shoe": "log10",
     "acc_peak": "m/s^2", "gyr_peak": "deg/s", "hf40": "%", "hf80": "%", "onset_hf": "m/s^2", "acc_gyro_lag": "ms",
     "swing_axis_yaw": "deg", "stance_velocity": "m/s", "rest_acc_norm": "m/s^2", "rest_gyro_change": "deg/s",
-    "rest_acc_change": "m/s^2", "closure_forward": "m/s", "closure_left": "m/s", "closure_up": "m/s",
+    "rest_acc_change": "m/s^2", **{f"rest_{s}_noise_lag{k}": "1" for s in ("acc", "gyro") for k in (1, 2)}, "closure_forward": "m/s",
+    "closure_left": "m/s", "closure_up": "m/s",
     "closure_roll": "deg", "closure_pitch": "deg",
     **{f"profile_{c}": ("m/s^2" if c.startswith("acc") else "deg/s") for c in CHANNELS}, **fig5.UNITS,
 }

@@ -34,6 +34,7 @@ ONSET_WINDOW_S = 0.1  # s, from the stride's gyro onset, over which onset_hf is 
 BAND_TOP_SHARE = 0.45  # 1, a band pass or searched frequency stays below this share of the sample rate
 REST_ACC_NORM_SD_FLOOR = 1e-4  # m/s^2, least sample spread of |f| at rest (a quantised sensor can read one value)
 QUIET_REST_S = 1.0  # s, least length of the first and last rest compared by rest_gyro_change / rest_acc_change
+REST_NOISE_BLOCK = 32  # samples, blocks of a long rest's core giving the rest_*_noise_lag* residuals (their scatter: the se)
 MIN_TRACK_SAMPLES = 10  # finite position-track samples needed for stance_velocity
 MIN_TRACK_STRIDE_M = 0.2  # m, a stride whose track moves less than this gives no forward direction (no stance_velocity)
 

@@ -40,9 +40,19 @@ simulated, so two signatures can be compared number by number:
    standard deviation / sqrt(samples)), ``rest_gyro_change`` (deg/s) and ``rest_acc_change`` (m/s^2): the
    length of the change of the mean angular rate and specific force from the first to the last detected rest
    (at least ``settings.QUIET_REST_S`` each; absent without two such rests), a drift no constant sensor error
-   makes, uncertainty from the samples' spread, and the phase profiles: each stride's six channels resampled onto
-   ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean and standard
-   error. Capitalised names are :mod:`gaitsim.loop.settings`.
+   makes, uncertainty from the samples' spread; ``rest_acc_noise_lag1``, ``rest_acc_noise_lag2``,
+   ``rest_gyro_noise_lag1`` and ``rest_gyro_noise_lag2`` (1): the autocorrelation at lags 1 and 2 of each sensor's
+   first difference at rest, per channel over blocks of ``settings.REST_NOISE_BLOCK`` samples of every rest of at
+   least ``settings.QUIET_REST_S`` (mean over the sensor's three channels and the blocks, uncertainty the blocks'
+   scatter). White noise reads -0.5 and 0 (a little above -0.5 in
+   blocks this short, in recording and twin alike); a low-pass in the sensor correlates neighbouring samples, and
+   the pair tells its form: a first-order stage without zeros, ``y[k] = b y[k-1] + (1 - b) x[k]``, reads
+   ``-(1 - b) / 2`` and ``-b (1 - b) / 2`` (b = 0.46 at a cutoff of an eighth of the sample rate: -0.27 and
+   -0.12), a digital Butterworth with the same lag 1 reads lag 2 below -0.35 (its zero at the Nyquist frequency).
+   Differences, less their straight line in each block, take out the slow motion of a foot that is not quite
+   still (a motion at frequency f keeps (2 pi f / rate)^2 of its variance in the difference); and the phase profiles: each stride's six channels
+   resampled onto ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean
+   and standard error. Capitalised names are :mod:`gaitsim.loop.settings`.
 
    Every mean over a rest (these, and the gyro bias the stride closure subtracts) is taken over its core
    (:func:`rest_core`): a detected rest reaches into the heel off, where the gyro already reads tens of deg/s,
@@ -214,6 +224,7 @@ def signature(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, pos_t: np.ndarray
     first_rest = rest_core(t, stances_all[0])
     scalars["rest_acc_norm"] = _rest_acc_norm(acc[first_rest])
     scalars.update(_rest_changes(t, acc, gyr, stances_all))
+    scalars.update(_rest_noise_correlation(t, acc, gyr, stances_all))
     closing = closure_between_stances(t, acc, gyr, stances, following(stances, stances_all), gravity,
                                       rest_gyro_bias(t, gyr, stances_all, scalars.get("rest_gyro_change")))
     for name, column in zip(CLOSURE, np.column_stack([closing.velocity, np.degrees(closing.tilt[:, :2])]).T):
@@ -325,6 +336,32 @@ def _rest_changes(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.n
         change = scale * (x[last].mean(0) - x[first].mean(0))
         spread = scale * np.hypot(_rest_mean_se(x[first]), _rest_mean_se(x[last]))
         out[name] = Scalar(float(np.linalg.norm(change)), float(np.linalg.norm(spread)), change)
+    return out
+
+
+def _rest_noise_correlation(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, stances: np.ndarray) -> dict:
+    """``rest_acc_noise_lag1`` ... ``rest_gyro_noise_lag2`` (1) over the long rests (module docstring); a sensor's
+    pair is absent with fewer than two blocks. Each block's first difference loses its straight line (the foot's
+    slow motion at a rest's edges, up to a quadratic in the samples); a channel whose first difference does not
+    vary (a quantised reading stuck on one value) is left out of its block."""
+    block = settings.REST_NOISE_BLOCK
+    ramp = np.arange(block - 1) - (block - 2) / 2.0
+    out = {}
+    for sensor, x in (("acc", acc), ("gyro", gyr)):
+        lags = []
+        for rest in _long_rests(t, stances):
+            core = x[rest_core(t, rest)]
+            for k in range(len(core) // block):
+                d = np.diff(core[k * block:(k + 1) * block], axis=0)
+                d -= d.mean(0) + np.outer(ramp, ramp @ d) / (ramp @ ramp)  # a quadratic motion's straight line
+                power = np.sum(d * d, axis=0)
+                moving = power > 0
+                if moving.any():
+                    lags.append([np.mean(np.sum(d[lag:] * d[:-lag], axis=0)[moving] / power[moving])
+                                 for lag in (1, 2)])
+        if len(lags) >= 2:
+            out.update({f"rest_{sensor}_noise_lag{lag}": mean_se(column)
+                        for lag, column in zip((1, 2), np.array(lags).T)})
     return out
 
 
