@@ -41,6 +41,7 @@ import numpy as np
 from gaitsim.experiments.setup import NavSettings, patched, settings_from_scenario
 from gaitsim.scenario import load_scenario, scenario_from_dict
 from gaitsim.simulate import simulate_walk
+from gaitsim.world.truth import within_intervals
 from nav.adaptive_detector import AdaptiveThreshold
 from nav.metrics import stance_match
 from nav.pipeline import NavOptions, run
@@ -117,20 +118,12 @@ def default_candidates() -> dict[str, NavOptions]:
             "50 ms window, ratio 0": dataclasses.replace(adaptive, adaptive=AdaptiveThreshold(ratio=0.0))}
 
 
-def ground_contact(rec) -> np.ndarray:
-    """(N,) bool: initial contact <= t < toe off of some stride (the foot touches the ground)."""
-    idx = np.searchsorted(rec.events.t_ic, rec.t, side="right") - 1
-    inside = idx >= 0
-    inside[inside] = rec.t[inside] < rec.events.t_to[idx[inside]]
-    return inside
-
-
 def simulated_rows(label: str, doc: dict, distance: float, options: dict[str, NavOptions], runs: int) -> list:
     scenario = scenario_from_dict(doc, label)
     per = {name: [] for name in options}
     for r in range(runs):
         rec = simulate_walk(scenario, run=r)
-        contact = ground_contact(rec)
+        contact = within_intervals(rec.t, rec.events.t_ic, rec.events.t_to)  # the foot touches the ground
         for name, opt in options.items():
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # possible-clipping notes of the running-timing walks

@@ -39,14 +39,20 @@ def increments(t: np.ndarray, vel: np.ndarray, q: np.ndarray, gravity: float) ->
     return dv, dth
 
 
-def stance_labels(t: np.ndarray, plan: StancePlan, labelled_stance: str) -> np.ndarray:
-    """True where ``start <= t < end`` of some stance's labelled part (:meth:`StancePlan.labelled`; the last
-    stance includes its end)."""
-    start, end = plan.labelled(labelled_stance)
+def within_intervals(t: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """(N,) bool: True where ``start[k] <= t < end[k]`` for some k (intervals sorted by start, not overlapping)."""
     idx = np.searchsorted(start, t, side="right") - 1
     ok = idx >= 0
     inside = np.zeros(t.size, bool)
     inside[ok] = t[ok] < end[idx[ok]]
+    return inside
+
+
+def stance_labels(t: np.ndarray, plan: StancePlan, labelled_stance: str) -> np.ndarray:
+    """True where ``start <= t < end`` of some stance's labelled part (:meth:`StancePlan.labelled`; the last
+    stance includes its end)."""
+    start, end = plan.labelled(labelled_stance)
+    inside = within_intervals(t, start, end)
     inside[t >= start[-1]] = True
     return inside
 
