@@ -44,13 +44,13 @@ simulated, so two signatures can be compared number by number:
    ``rest_gyro_noise_lag1`` and ``rest_gyro_noise_lag2`` (1): the autocorrelation at lags 1 and 2 of each sensor's
    first difference at rest, per channel over blocks of ``settings.REST_NOISE_BLOCK`` samples of every rest of at
    least ``settings.QUIET_REST_S`` (mean over the sensor's three channels and the blocks, uncertainty the blocks'
-   scatter). White noise reads -0.5 and 0 (a little above -0.5 in
-   blocks this short, in recording and twin alike); a low-pass in the sensor correlates neighbouring samples, and
-   the pair tells its form: a first-order stage without zeros, ``y[k] = b y[k-1] + (1 - b) x[k]``, reads
-   ``-(1 - b) / 2`` and ``-b (1 - b) / 2`` (b = 0.46 at a cutoff of an eighth of the sample rate: -0.27 and
-   -0.12), a digital Butterworth with the same lag 1 reads lag 2 below -0.35 (its zero at the Nyquist frequency).
-   Differences, less their straight line in each block, take out the slow motion of a foot that is not quite
-   still (a motion at frequency f keeps (2 pi f / rate)^2 of its variance in the difference); and the phase profiles: each stride's six channels
+   scatter). White noise reads -0.5 and 0 (a little above -0.5 in blocks this short, in recording and twin alike);
+   a low-pass in the sensor correlates neighbouring samples, and the pair tells its form: a first-order stage
+   without zeros, ``y[k] = b y[k-1] + (1 - b) x[k]``, reads ``-(1 - b) / 2`` and ``-b (1 - b) / 2`` (b = 0.46 at a
+   cutoff of an eighth of the sample rate: -0.27 and -0.12), a digital Butterworth with the same lag 1 reads lag 2
+   below -0.35 (its zero at the Nyquist frequency). Differences, less their straight line in each block, take out
+   the slow motion of a foot that is not quite still (a motion at frequency f keeps (2 pi f / rate)^2 of its
+   variance in the difference); and the phase profiles: each stride's six channels
    resampled onto ``PHASE_POINTS`` points of the normalised gait phase (0 = stance onset), with per-phase mean
    and standard error. Capitalised names are :mod:`gaitsim.loop.settings`.
 
@@ -346,13 +346,13 @@ def _rest_noise_correlation(t: np.ndarray, acc: np.ndarray, gyr: np.ndarray, sta
     vary (a quantised reading stuck on one value) is left out of its block."""
     block = settings.REST_NOISE_BLOCK
     ramp = np.arange(block - 1) - (block - 2) / 2.0
+    cores = [rest_core(t, rest) for rest in _long_rests(t, stances)]
     out = {}
     for sensor, x in (("acc", acc), ("gyro", gyr)):
         lags = []
-        for rest in _long_rests(t, stances):
-            core = x[rest_core(t, rest)]
-            for k in range(len(core) // block):
-                d = np.diff(core[k * block:(k + 1) * block], axis=0)
+        for core in cores:
+            for start in range(core.start, core.stop - block + 1, block):
+                d = np.diff(x[start:start + block], axis=0)
                 d -= d.mean(0) + np.outer(ramp, ramp @ d) / (ramp @ ramp)  # a quadratic motion's straight line
                 power = np.sum(d * d, axis=0)
                 moving = power > 0
