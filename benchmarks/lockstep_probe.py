@@ -20,7 +20,7 @@ import argparse
 import numpy as np
 from numba import njit
 
-from nav._numba.covariance import propagate
+from nav._numba.covariance import propagate, row_stride
 from nav_speed import best_cpu_seconds  # a sibling script (benchmarks/ is on the path)
 
 STATES = 15
@@ -84,7 +84,8 @@ def propagate_runs(P, steps, h, a, C, power):
 
 @njit
 def propagate_each(P, steps, h, a, C, f, power):
-    """``steps`` propagations of each run's P (R, n, n) by nav's propagate, one run after the other."""
+    """``steps`` propagations of each run's P (R, n * W), flat as nav holds it, by nav's propagate, one run after
+    the other."""
     for _ in range(steps):
         for r in range(P.shape[0]):
             propagate(P[r], STATES, h, a[r], C[r], f[r], power)
@@ -106,13 +107,17 @@ def main(argv=None) -> int:
         a = np.einsum("rij,rj->ri", C, f)
         lanes = (np.ascontiguousarray(P.transpose(1, 2, 0)), np.ascontiguousarray(a.T),
                  np.ascontiguousarray(C.transpose(1, 2, 0)))
-        each, together = P.copy(), lanes[0].copy()
+        width = row_stride(STATES)
+        padded = np.zeros((runs, STATES, width))  # nav's flat covariance: rows padded to its row stride
+        padded[:, :, :STATES] = P
+        flat = padded.reshape(runs, -1)
+        each, together = flat.copy(), lanes[0].copy()
         propagate_each(each, 50, h, a, C, f, power)
         propagate_runs(together, 50, h, lanes[1], lanes[2], power)
-        if not np.array_equal(each, together.transpose(2, 0, 1)):
+        if not np.array_equal(each.reshape(runs, STATES, width)[:, :, :STATES], together.transpose(2, 0, 1)):
             print(f"R={runs}: lock-step differs from nav's propagate")
             return 1
-        one = best_cpu_seconds(lambda: propagate_each(P.copy(), STEPS, h, a, C, f, power), args.repeats)
+        one = best_cpu_seconds(lambda: propagate_each(flat.copy(), STEPS, h, a, C, f, power), args.repeats)
         lock = best_cpu_seconds(lambda: propagate_runs(lanes[0].copy(), STEPS, h, lanes[1], lanes[2], power),
                                 args.repeats)
         scale = 1e9 / (STEPS * runs)

@@ -23,7 +23,7 @@ from numba import njit
 from gaitsim.scenario import load_scenario
 from gaitsim.simulate import simulate_walk
 from nav import detectors
-from nav._numba.covariance import joseph_update, propagate, update_buffers
+from nav._numba.covariance import joseph_update, propagate, row_stride, update_buffers
 from nav._numba.ekf import _inject, _store
 from nav._numba.strapdown import MODE_POINT_SAMPLES, apply_increment, increment_buffers, interval_increments
 from nav.alignment import align
@@ -60,9 +60,8 @@ def _updates(P0, calls, restore_only, z, r_var):
     s = np.empty(3)
     work = update_buffers(n)
     for _ in range(calls):
-        for i in range(n):
-            for j in range(n):
-                P[i, j] = P0[i, j]
+        for i in range(P.size):
+            P[i] = P0[i]
         if not restore_only:
             joseph_update(P, n, h_col, h_val, h_cnt, 3, z, r_var, dx, K, s, work)
     return P
@@ -124,7 +123,7 @@ def _stores(calls, n_samples, P):
         k = c % n_samples
         _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
         for i in range(STATES):
-            p_diag[k, i] = P[i, i]
+            p_diag[k, i] = P[i * (row_stride(STATES) + 1)]
     return quat[0, 0]
 
 
@@ -161,7 +160,9 @@ def main(argv=None) -> int:
     sol = whole()
     C = np.eye(3)
     fhat = np.array([0.0, 0.0, cfg.gravity])
-    P0 = np.diag(sol.p_diag[stance]).copy()
+    P0 = np.zeros((STATES, row_stride(STATES)))  # flat as the filter holds it: rows padded to its row stride
+    P0[:, :STATES] = np.diag(sol.p_diag[stance])
+    P0 = P0.reshape(-1)
     power = np.zeros(STATES)
     power[3:9] = [cfg.acc_noise_density ** 2] * 3 + [cfg.gyr_noise_density ** 2] * 3
     _propagations(P0, 800, rec.t, fhat, C, power)  # correlate the states, as a stride's swing does

@@ -25,34 +25,37 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .covariance import joseph_update, propagate, transition_rows, transition_transposed, update_buffers
+from .covariance import (covariance_zeros, joseph_update, propagate, row_stride, transition_rows,
+                         transition_transposed, update_buffers)
 from .quat import qexp, qmatrix, qmul, qnormalised
 from .strapdown import MODE_INCREMENTS, apply_increment, increment_buffers, interval_increments
 
 
 @njit(cache=True)
 def initial_covariance_and_noise(n, cfg):
-    """Initial covariance P (n x n) and continuous driving-noise power (n,), (unit/s)^2 * s, from cfg."""
-    P = np.zeros((n, n))
+    """Initial covariance P (n x n, flat: :func:`.covariance.covariance_zeros`) and continuous driving-noise power
+    (n,), (unit/s)^2 * s, from cfg."""
+    P = covariance_zeros(n)
+    d = row_stride(n) + 1  # from one diagonal element to the next
     for i in range(3):
-        P[i, i] = cfg.p0_pos ** 2
-        P[3 + i, 3 + i] = cfg.p0_vel ** 2
-    P[6, 6] = cfg.p0_tilt ** 2
-    P[7, 7] = cfg.p0_tilt ** 2
-    P[8, 8] = cfg.p0_yaw ** 2
+        P[i * d] = cfg.p0_pos ** 2
+        P[(3 + i) * d] = cfg.p0_vel ** 2
+    P[6 * d] = cfg.p0_tilt ** 2
+    P[7 * d] = cfg.p0_tilt ** 2
+    P[8 * d] = cfg.p0_yaw ** 2
     power = np.zeros(n)
     for i in range(3):
         power[3 + i] = cfg.acc_noise_density ** 2
         power[6 + i] = cfg.gyr_noise_density ** 2
     if n >= 15:
         for i in range(3):
-            P[9 + i, 9 + i] = cfg.p0_acc_bias ** 2
-            P[12 + i, 12 + i] = cfg.p0_gyr_bias ** 2
+            P[(9 + i) * d] = cfg.p0_acc_bias ** 2
+            P[(12 + i) * d] = cfg.p0_gyr_bias ** 2
             power[9 + i] = cfg.acc_bias_random_walk ** 2
             power[12 + i] = cfg.gyr_bias_random_walk ** 2
     if n == 24:
         for i in range(9):
-            P[15 + i, 15 + i] = cfg.p0_gsens ** 2
+            P[(15 + i) * d] = cfg.p0_gsens ** 2
             power[15 + i] = cfg.gsens_random_walk ** 2
     return P, power
 
@@ -135,8 +138,8 @@ def filter_run(mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
     it receives every sample in turn and holds the last one's (not with ``rts``, which reads them back). Returns
     the number of measurement updates skipped because the innovation covariance was not positive definite.
 
-    The state count is a constant in each branch: the compiler unrolls the block loops for it (for 9 and 15 states
-    they are too short, under 16 iterations, for LLVM to vectorise them).
+    The state count is a constant in each branch: the compiler unrolls the block loops for it, and the covariance's
+    row stride is a constant with it, so that the loops over its columns vectorise (:mod:`.covariance`).
     """
     if cfg.states == 9:
         return _filter(9, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p0, cfg, rts, quat, vel,
@@ -246,7 +249,7 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
 
         _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
         for i in range(n):
-            p_diag[min(k, p_diag.shape[0] - 1), i] = P[i, i]
+            p_diag[min(k, p_diag.shape[0] - 1), i] = P[i * (row_stride(n) + 1)]
         if k == n_samples - 1:
             break
 
@@ -294,7 +297,7 @@ def _smooth(t, i0, n, power, records, count, quat, vel, pos, bias_acc, bias_gyr,
     f_store = records[7]
     lam = np.zeros(n)
     w = np.zeros(n)
-    d = np.empty((n, 1))
+    d = np.empty(n)
     dx = np.empty(n)
     C = np.empty((3, 3))
     a = np.empty(3)
@@ -313,12 +316,12 @@ def _smooth(t, i0, n, power, records, count, quat, vel, pos, bias_acc, bias_gyr,
         for i in range(3):
             a[i] = C[i, 0] * f[0] + C[i, 1] * f[1] + C[i, 2] * f[2]
         for i in range(n):
-            d[i, 0] = w[i] + power[i] * h * lam[i]
-        transition_rows(d, n, 1, h, a, C, f, True)
+            d[i] = w[i] + power[i] * h * lam[i]
+        transition_rows(d, 1, n, h, a, C, f, True)
         transition_transposed(lam, n, h, a, C, f)
         for i in range(n):
-            dx[i] = d[i, 0]
-            w[i] = d[i, 0]
+            dx[i] = d[i]
+            w[i] = d[i]
         v[:] = vel[k]
         p[:] = pos[k]
         ba[:] = bias_acc[k]
