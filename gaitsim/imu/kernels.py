@@ -69,23 +69,23 @@ def _add_interpolated(block, nodes, fractions, node, offset):
 @njit(cache=True)
 def _add_stochastic_terms(out, signal, summand, offsets, instability_nodes, instability_step, walk_nodes,
                           walk_step, white_std, resolution, limit, generator, state):
-    """``out`` (n, 3) = ``signal`` (n, 3; may be ``out``) + ``summand`` (n, 3; none when it has no rows) + each
-    row of ``offsets`` (K, 3) per axis in turn (the deterministic terms' sums) + bias instability + random walk
-    (each linearly interpolated between its nodes, spaced ``*_step`` samples; none when it has no nodes) + white
-    noise of std ``white_std`` (3,) (none when all zero), then quantisation and clipping (``resolution`` 0 and
-    ``limit`` inf: none). Each sum is rounded in this order, as separate passes over the arrays would round it;
-    the terms are added a block at a time in a cache-resident buffer, each in its own simple loop. The normals
-    are drawn from the bit generator (``generator``, ``state``: see :func:`gaitsim.imu.normals.with_bit_words`);
-    returns its state after them."""
+    """``out`` (n, 3) = ``signal`` (n, 3; none when it has no rows: ``out`` holds it already) + ``summand`` (n, 3;
+    none when it has no rows) + each row of ``offsets`` (K, 3) per axis in turn (the deterministic terms' sums) +
+    bias instability + random walk (each linearly interpolated between its nodes, spaced ``*_step`` samples; none
+    when it has no nodes) + white noise of std ``white_std`` (3,) (none when all zero), then quantisation and
+    clipping (``resolution`` 0 and ``limit`` inf: none). Each sum is rounded in this order, as separate passes
+    over the arrays would round it; the terms are added to ``out`` a cache-sized block at a time, each in its own
+    simple loop. The normals are drawn from the bit generator (``generator``, ``state``: see
+    :func:`gaitsim.imu.normals.with_bit_words`); returns its state after them."""
     white = white_std[0] != 0.0 or white_std[1] != 0.0 or white_std[2] != 0.0
     finish = resolution > 0.0 or limit < np.inf
-    buffer = np.empty((STOCHASTIC_BLOCK, 3))
     instability_at = walk_at = (0, 0)  # (node before the block's first sample, its offset from that node)
     instability_fractions, walk_fractions = _fractions(instability_step), _fractions(walk_step)
     for start in range(0, out.shape[0], STOCHASTIC_BLOCK):
         stop = min(out.shape[0], start + STOCHASTIC_BLOCK)
-        block = buffer[: stop - start]
-        block[:] = signal[start:stop]
+        block = out[start:stop]  # the terms are summed where they end, a cache-sized block at a time
+        if signal.shape[0]:
+            block[:] = signal[start:stop]
         if summand.shape[0]:
             block += summand[start:stop]
         for offset in offsets:
@@ -105,7 +105,6 @@ def _add_stochastic_terms(out, signal, summand, offsets, instability_nodes, inst
             for k in range(block.shape[0]):
                 for c in range(3):
                     block[k, c] = _quantised(block[k, c], resolution, limit)
-        out[start:stop] = block
     return state
 
 
@@ -143,7 +142,8 @@ def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng
     if any(np.ndim(addend) == 2 for addend in addends):
         raise ValueError("an (n, 3) addend must come first")
     offsets = np.array([np.broadcast_to(np.asarray(addend, float), 3) for addend in addends]).reshape(-1, 3)
-    signal, summand = kernel_array(signal, float), kernel_array(summand, float)  # one compiled type
+    signal = _NO_SUMMAND if signal is out else kernel_array(signal, float)  # one compiled type
+    summand = kernel_array(summand, float)
     with_bit_words(rng, _add_stochastic_terms, out, signal, summand, offsets, *instability, *walk,
                    np.asarray(white_std, float), resolution, limit)
 
