@@ -269,11 +269,10 @@ def _filter(n, mode, t, u_acc, u_gyr, stationary, stance_velocity, i0, q0, v0, p
 
 
 @njit(cache=True)
-def _adjoint_updates(k, count, records, n, lam, w):
+def _adjoint_updates(k, count, records, n, lam, w, g):
     """Undo the updates at sample k in the adjoint ``lam`` (last first) and add their corrections to ``w``;
-    returns the number of records left."""
+    ``g`` is a (3,) work buffer. Returns the number of records left."""
     sample, cols, vals, cnts, gains, zs, sz, _ = records
-    g = np.empty(3)
     while count > 0 and sample[count - 1] == k:
         count -= 1
         K = gains[count]
@@ -307,7 +306,8 @@ def _smooth(t, i0, n, power, records, count, quat, vel, pos, bias_acc, bias_gyr,
     ba = np.empty(3)
     bg = np.empty(3)
     G = np.empty(9)
-    count = _adjoint_updates(n_samples - 1, count, records, n, lam, w)
+    g = np.empty(3)
+    count = _adjoint_updates(n_samples - 1, count, records, n, lam, w, g)
     for k in range(n_samples - 2, i0 - 1, -1):
         h = t[k + 1] - t[k]
         f = f_store[k - i0]
@@ -329,7 +329,7 @@ def _smooth(t, i0, n, power, records, count, quat, vel, pos, bias_acc, bias_gyr,
         G[:] = gsens[k]
         _inject(dx, n, q, v, p, ba, bg, G)
         _store(k, q, v, p, ba, bg, G, quat, vel, pos, bias_acc, bias_gyr, gsens)
-        count = _adjoint_updates(k, count, records, n, lam, w)
+        count = _adjoint_updates(k, count, records, n, lam, w, g)
 
 
 @njit(cache=True, parallel=True)
