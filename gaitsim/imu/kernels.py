@@ -29,7 +29,7 @@ def _quantised(value, resolution, limit):
     return min(max(value, -limit), limit)
 
 
-STOCHASTIC_BLOCK = 4096  # samples summed at a time in a cache-resident buffer
+STOCHASTIC_BLOCK = 4096  # samples summed at a time (96 kB: the block stays in the core's cache)
 
 
 @njit(cache=True)
@@ -128,7 +128,7 @@ def first_order_recursion(first: np.ndarray, steps: np.ndarray, decay: float) ->
     return nodes
 
 
-_NO_SUMMAND = np.zeros((0, 3))  # no (n, 3) addend
+_NO_ROWS = np.zeros((0, 3))  # an (n, 3) input left out: no summand, or no signal (``out`` holds it)
 
 
 def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng, resolution, limit) -> None:
@@ -136,13 +136,13 @@ def add_stochastic_terms(out, signal, addends, instability, walk, white_std, rng
     first, then numbers or (3,) vectors) + bias instability + random walk (each ``(nodes, node_step)``; no nodes:
     off) + white noise of per-axis std ``white_std`` drawn from ``rng``, then quantised and clipped (see
     :func:`_add_stochastic_terms`); ``out`` may be ``signal``."""
-    summand = _NO_SUMMAND
+    summand = _NO_ROWS
     if addends and np.ndim(addends[0]) == 2:
         summand, addends = addends[0], addends[1:]
     if any(np.ndim(addend) == 2 for addend in addends):
         raise ValueError("an (n, 3) addend must come first")
     offsets = np.array([np.broadcast_to(np.asarray(addend, float), 3) for addend in addends]).reshape(-1, 3)
-    signal = _NO_SUMMAND if signal is out else kernel_array(signal, float)  # one compiled type
+    signal = _NO_ROWS if signal is out else kernel_array(signal, float)  # one compiled type
     summand = kernel_array(summand, float)
     with_bit_words(rng, _add_stochastic_terms, out, signal, summand, offsets, *instability, *walk,
                    np.asarray(white_std, float), resolution, limit)
