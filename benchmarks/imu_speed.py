@@ -4,13 +4,18 @@ Prints IMU samples per second (one sample = one 6-axis reading: 3 accel + 3 gyro
 for a configuration with every term on, on a 2,000,000-sample (about 42 min) walking-like record at 800 Hz (best of 9 runs),
 with one BLAS thread (the deterministic terms' matrix products) unless OPENBLAS_NUM_THREADS is set. Records of
 1 M samples or more take the compiled kernels (gaitsim.imu.kernels); shorter ones the numpy reference path.
-Run: PYTHONPATH=$PWD python benchmarks/imu_speed.py [n_samples]
+Run: PYTHONPATH=$PWD python benchmarks/imu_speed.py [n_samples] [--worker-memory]
+
+``--worker-memory`` first sets glibc's malloc as the runner's workers set it
+(:func:`gaitsim.experiments.runner.keep_freed_memory`): the outputs (24 MB per sensor and 1 M samples) then reuse
+the memory the previous call freed instead of being mapped afresh and paid again in page faults. That is how the
+model runs in a Monte Carlo study's workers; without it, as in a plain script.
 """
 
 from __future__ import annotations
 
 import os
-import sys
+import argparse
 import time
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core: before numpy loads OpenBLAS
@@ -18,6 +23,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core: before numpy loa
 import numpy as np  # noqa: E402
 
 import gaitsim.imu.kernels  # noqa: E402,F401  (numba loaded before the arrays: see samples_per_second)
+from gaitsim.experiments.runner import keep_freed_memory  # noqa: E402
 from gaitsim.imu.model import apply_sensor  # noqa: E402
 from gaitsim.imu.presets import get_preset  # noqa: E402
 
@@ -55,9 +61,16 @@ def samples_per_second(spec, t, acc, gyr, repeats: int = 9) -> float:
 
 
 def main() -> None:
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 2_000_000
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("n_samples", nargs="?", type=int, default=2_000_000, help="record length (default 2000000)")
+    parser.add_argument("--worker-memory", action="store_true", help="malloc set as the runner's workers set it")
+    args = parser.parse_args()
+    if args.worker_memory:
+        keep_freed_memory()
+    n = args.n_samples
     t, acc, gyr = truth(n)
-    print(f"apply_sensor on {n} samples at 800 Hz, one core (numpy {np.__version__})")
+    memory = "the runner's worker memory setting" if args.worker_memory else "glibc's default malloc"
+    print(f"apply_sensor on {n} samples at 800 Hz, one core (numpy {np.__version__}), {memory}")
     for spec in (get_preset("ideal"), get_preset("vn200"), get_preset("paper-vn200"), get_preset("bmi160"),
                  everything_on()):
         rate = samples_per_second(spec, t, acc, gyr)
