@@ -20,7 +20,7 @@ import argparse
 import numpy as np
 from numba import njit
 
-from nav._numba.covariance import propagate, row_stride
+from nav._numba.covariance import dense_covariances, flat_covariances, propagate
 from nav_speed import best_cpu_seconds  # a sibling script (benchmarks/ is on the path)
 
 STATES = 15
@@ -107,14 +107,11 @@ def main(argv=None) -> int:
         a = np.einsum("rij,rj->ri", C, f)
         lanes = (np.ascontiguousarray(P.transpose(1, 2, 0)), np.ascontiguousarray(a.T),
                  np.ascontiguousarray(C.transpose(1, 2, 0)))
-        width = row_stride(STATES)
-        padded = np.zeros((runs, STATES, width))  # nav's flat covariance: rows padded to its row stride
-        padded[:, :, :STATES] = P
-        flat = padded.reshape(runs, -1)
+        flat = flat_covariances(P)  # held as nav holds it
         each, together = flat.copy(), lanes[0].copy()
         propagate_each(each, 50, h, a, C, f, power)
         propagate_runs(together, 50, h, lanes[1], lanes[2], power)
-        if not np.array_equal(each.reshape(runs, STATES, width)[:, :, :STATES], together.transpose(2, 0, 1)):
+        if not np.array_equal(dense_covariances(each, STATES)[0], together.transpose(2, 0, 1)):
             print(f"R={runs}: lock-step differs from nav's propagate")
             return 1
         one = best_cpu_seconds(lambda: propagate_each(flat.copy(), STEPS, h, a, C, f, power), args.repeats)

@@ -23,7 +23,7 @@ from numba import njit
 from gaitsim.scenario import load_scenario
 from gaitsim.simulate import simulate_walk
 from nav import detectors
-from nav._numba.covariance import joseph_update, propagate, row_stride, update_buffers
+from nav._numba.covariance import flat_covariances, joseph_update, propagate, row_stride, update_buffers
 from nav._numba.ekf import _inject, _store
 from nav._numba.strapdown import MODE_POINT_SAMPLES, apply_increment, increment_buffers, interval_increments
 from nav.alignment import align
@@ -160,9 +160,7 @@ def main(argv=None) -> int:
     sol = whole()
     C = np.eye(3)
     fhat = np.array([0.0, 0.0, cfg.gravity])
-    P0 = np.zeros((STATES, row_stride(STATES)))  # flat as the filter holds it: rows padded to its row stride
-    P0[:, :STATES] = np.diag(sol.p_diag[stance])
-    P0 = P0.reshape(-1)
+    P0 = flat_covariances(np.diag(sol.p_diag[stance]))  # held as the filter holds it
     power = np.zeros(STATES)
     power[3:9] = [cfg.acc_noise_density ** 2] * 3 + [cfg.gyr_noise_density ** 2] * 3
     _propagations(P0, 800, rec.t, fhat, C, power)  # correlate the states, as a stride's swing does

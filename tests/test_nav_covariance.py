@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from nav import quaternion as Q
-from nav._numba.covariance import covariance_zeros, joseph_update, propagate, row_stride, update_buffers
+from nav._numba.covariance import dense_covariances, flat_covariances, joseph_update, propagate, update_buffers
 
 H_STEP = 1.0 / 800.0  # s
 
@@ -23,19 +23,6 @@ def dense_transition(n, h, C, f):
     return np.eye(n) + F * h
 
 
-def to_flat(P):
-    n = P.shape[0]
-    X = covariance_zeros(n).reshape(n, row_stride(n))
-    X[:, :n] = P
-    return X.reshape(-1)
-
-
-def split_flat(X, n):
-    """(the n x n matrix, its padding columns) of a flat covariance."""
-    rows = X.reshape(n, row_stride(n))
-    return rows[:, :n], rows[:, n:]
-
-
 def random_case(n, seed):
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(n, n)) * np.geomspace(1e-1, 1e-4, n)  # states of very different sizes, as in the filter
@@ -48,9 +35,9 @@ def random_case(n, seed):
 def test_propagation_equals_dense_phi_p_phi_t_plus_q(n):
     rng, P, C, f = random_case(n, n)
     power = rng.uniform(0.0, 1e-3, n)
-    X = to_flat(P)
+    X = flat_covariances(P)
     propagate(X, n, H_STEP, C @ f, C, f, power)
-    result, padding = split_flat(X, n)
+    result, padding = dense_covariances(X, n)
     Phi = dense_transition(n, H_STEP, C, f)
     expected = Phi @ P @ Phi.T + np.diag(power) * H_STEP
     np.testing.assert_allclose(result, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
@@ -72,10 +59,10 @@ def test_joseph_update_equals_the_dense_joseph_form(n, m):
         H[r, c] = 1.0
     z = rng.normal(0.0, 0.01, 3)
     r_var = np.full(3, 1e-4)
-    X = to_flat(P)
+    X = flat_covariances(P)
     dx, K, s = np.empty(n), np.empty((n, 3)), np.empty(3)
     assert joseph_update(X, n, h_col, h_val, h_cnt, m, z, r_var, dx, K, s, update_buffers(n))
-    result, padding = split_flat(X, n)
+    result, padding = dense_covariances(X, n)
     R = np.diag(r_var[:m])
     gain = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
     keep = np.eye(n) - gain @ H
@@ -90,7 +77,7 @@ def test_a_non_positive_innovation_leaves_p_untouched():
     n = 15
     P = np.eye(n)
     P[3, 3] = -2.0  # S = P[3, 3] + R < 0
-    X = to_flat(P)
+    X = flat_covariances(P)
     h_col, h_val, h_cnt = np.zeros((3, 4), np.int64), np.zeros((3, 4)), np.zeros(3, np.int64)
     h_col[0, 0], h_val[0, 0], h_cnt[0] = 3, 1.0, 1
     before = X.copy()

@@ -45,6 +45,21 @@ def covariance_zeros(n):
     return np.zeros(n * row_stride(n))
 
 
+def flat_covariances(P: np.ndarray) -> np.ndarray:
+    """The flat storage of the dense covariances P (..., n, n): shape (..., n * row_stride(n)), padding zero."""
+    n = P.shape[-1]
+    rows = np.zeros(P.shape[:-1] + (row_stride(n),))
+    rows[..., :n] = P
+    return rows.reshape(P.shape[:-2] + (-1,))
+
+
+def dense_covariances(X: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Views of the flat covariances X (..., n * row_stride(n)) of n states: (the (..., n, n) matrices, their
+    (..., n, row_stride(n) - n) padding)."""
+    rows = X.reshape(X.shape[:-1] + (n, row_stride(n)))
+    return rows[..., :n], rows[..., n:]
+
+
 @njit(cache=True, inline="always")
 def _transition_column(X, W, j, n, h, a, C, f, inverse, first_row):
     """Column j of X <- Phi X[:, j] (or Phi^-1 X[:, j]), X flat with rows of W entries; only its rows first_row:9
